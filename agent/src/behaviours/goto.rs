@@ -1,0 +1,119 @@
+//! Go to the goal with reactive lidar obstacle avoidance and periodic pose beacons.
+//!
+//! Each robot heads for its own slot on a grid around the goal centre (so nine robots do not
+//! fight for one point), steers proportionally toward it, and when the lidar sees something
+//! closer than `avoid_distance` ahead, turns toward the more open side and slows down.
+
+use std::f64::consts::PI;
+use swarmrt_protocol::config::{Config, GotoConfig, LidarConfig, grid_around};
+use swarmrt_protocol::{BROADCAST, Command, Observation, RadioMsg};
+
+use super::Behaviour;
+use crate::agent::Decoded;
+
+/// Go-to-goal state for one robot.
+pub struct Goto {
+    id: u32,
+    params: GotoConfig,
+    lidar: LidarConfig,
+    radius: f64,
+    dt: f64,
+    max_speed: f64,
+    max_turn: f64,
+    slot: (f64, f64),
+}
+
+/// Distance to the slot under which the robot stops.
+const ARRIVE: f64 = 0.05;
+/// Half-width of the sector ahead that counts for avoidance.
+const AHEAD: f64 = 70.0 * PI / 180.0;
+
+impl Goto {
+    /// Robot `id`'s behaviour for this scenario.
+    pub fn new(cfg: &Config, params: &GotoConfig, id: u32) -> Goto {
+        let g = cfg.map.goal;
+        let slots = grid_around(cfg.robots.count as usize, g.x, g.y, params.slot_spacing);
+        Goto {
+            id,
+            params: *params,
+            lidar: cfg.robots.lidar,
+            radius: cfg.robots.radius,
+            dt: cfg.scenario.dt,
+            max_speed: cfg.robots.max_speed,
+            max_turn: cfg.robots.max_turn_rate,
+            slot: slots[id as usize],
+        }
+    }
+
+    /// The point this robot is heading for.
+    pub fn slot(&self) -> (f64, f64) {
+        self.slot
+    }
+}
+
+fn wrap(a: f64) -> f64 {
+    let mut a = a % (2.0 * PI);
+    if a <= -PI {
+        a += 2.0 * PI;
+    } else if a > PI {
+        a -= 2.0 * PI;
+    }
+    a
+}
+
+impl Behaviour for Goto {
+    fn step(&mut self, obs: &Observation, _inbox: &[Decoded]) -> Command {
+        let mut cmd = Command::act(self.id, obs.tick);
+        cmd.lidar_on = 1;
+        let p = self.params;
+        if p.beacon_period > 0 && (obs.tick + self.id as u64) % p.beacon_period as u64 == 0 {
+            let beacon = RadioMsg::Beacon {
+                x: obs.x,
+                y: obs.y,
+                theta: obs.theta,
+            };
+            // A beacon always fits an empty outbox.
+            let _ = cmd.push_frame(BROADCAST, &beacon);
+        }
+
+        let (dx, dy) = (self.slot.0 - obs.x, self.slot.1 - obs.y);
+        let dist = (dx * dx + dy * dy).sqrt();
+        if dist < ARRIVE {
+            return cmd;
+        }
+        let err = wrap(dy.atan2(dx) - obs.theta);
+        let mut omega = 2.0 * err;
+        // Slow down when facing away and when close, so the robot does not orbit its slot.
+        let mut v = p.speed * err.cos().max(0.0) * (dist / (4.0 * self.radius)).min(1.0);
+
+        // Avoidance: nearest return in the sector ahead, and which side is more open.
+        let (mut nearest, mut left, mut right) = (f64::INFINITY, 0.0, 0.0);
+        for (k, &d) in obs.lidar().iter().enumerate() {
+            let a = self.lidar.ray_angle(k);
+            if a.abs() <= AHEAD {
+                nearest = nearest.min(d);
+            }
+            if a > 0.0 {
+                left += d;
+            } else if a < 0.0 {
+                right += d;
+            }
+        }
+        // Only obstacles closer than the slot matter.
+        if nearest < p.avoid_distance && nearest < dist {
+            let side = if left >= right { 1.0 } else { -1.0 };
+            let urgency =
+                1.0 - (nearest - self.radius).max(0.0) / (p.avoid_distance - self.radius).max(1e-6);
+            omega = side * self.max_turn * urgency.clamp(0.3, 1.0);
+            v *= (1.0 - urgency).clamp(0.0, 1.0);
+            if nearest < self.radius + 0.1 {
+                v = 0.0;
+            }
+        }
+
+        // Never overshoot the slot within one tick.
+        cmd.v = v.min(dist / self.dt).clamp(0.0, self.max_speed);
+        cmd.omega = omega.clamp(-self.max_turn, self.max_turn);
+        cmd
+    }
+}

@@ -1,0 +1,33 @@
+//! A robot: fed one [`Observation`] per tick, answers one [`Command`]. The core ([`Agent`])
+//! is pure: no I/O, no clock; its randomness comes from the run seed and the robot id. The
+//! process shell (`shell`) only moves observations and commands through iceoryx2.
+//!
+//! ```
+//! use swarmrt_agent::Agent;
+//! use swarmrt_protocol::{config::Config, Observation};
+//!
+//! let cfg = Config::from_toml_str("doc.toml", r#"
+//!     [scenario]
+//!     name = "doc"
+//!     ticks = 5
+//!     [map]
+//!     bounds = [0.0, 0.0, 10.0, 10.0]
+//!     goal = { x = 8.0, y = 2.0, radius = 1.0 }
+//!     [robots]
+//!     count = 1
+//! "#, &[]).unwrap();
+//! let mut agent = Agent::new(&cfg, 0);
+//! let mut obs = Observation::empty(0, 0);
+//! obs.x = 2.0;
+//! obs.y = 2.0;
+//! let cmd = agent.step(&obs);
+//! assert!(cmd.v > 0.0, "the goal is straight ahead");
+//! ```
+#![warn(missing_docs)]
+
+pub mod agent;
+pub mod behaviours;
+pub mod shell;
+
+pub use agent::{Agent, Decoded};
+pub use swarmrt_protocol::{Command, Observation};

@@ -1,0 +1,60 @@
+//! `swarm-agent`: one robot process. Started by `swarm run`, not by hand.
+
+use clap::Parser;
+use swarmrt_agent::shell;
+use swarmrt_protocol::config::Config;
+use swarmrt_protocol::services::{RunServices, valid_run_id};
+
+/// One robot of a swarmrt run.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+struct Args {
+    /// Run id (lower-case hex) naming the run's iceoryx2 services.
+    #[arg(long)]
+    run_id: String,
+    /// The robot id, 0..robots.count.
+    #[arg(long)]
+    robot: u32,
+    /// The resolved config of the run.
+    #[arg(long)]
+    config: std::path::PathBuf,
+}
+
+fn main() -> std::process::ExitCode {
+    let args = Args::parse();
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let span = tracing::info_span!("robot", agent_id = args.robot);
+    let _enter = span.enter();
+    if !valid_run_id(&args.run_id) {
+        tracing::error!(run_id = %args.run_id, "invalid run id");
+        return std::process::ExitCode::from(2);
+    }
+    let cfg = match Config::load(&args.config, &[]) {
+        Ok(c) => c,
+        Err(e) => {
+            tracing::error!("{e}");
+            return std::process::ExitCode::from(2);
+        }
+    };
+    if args.robot >= cfg.robots.count {
+        tracing::error!(robots = cfg.robots.count, "robot id out of range");
+        return std::process::ExitCode::from(2);
+    }
+    let run = RunServices::new(&args.run_id);
+    match shell::run(&run, &cfg, args.robot) {
+        // Exit code 0 means exactly "the world ended the run", so the orchestrator can tell a
+        // clean end from a robot that vanished mid-run.
+        Ok(shell::Exit::Shutdown) => std::process::ExitCode::SUCCESS,
+        Ok(shell::Exit::Terminated) => std::process::ExitCode::from(143),
+        Err(e) => {
+            tracing::error!("robot failed: {e}");
+            std::process::ExitCode::from(1)
+        }
+    }
+}

@@ -1,0 +1,117 @@
+//! Removing a run's iceoryx2 files and shared-memory segments, on every exit path and for
+//! `swarm clean`. Every run lives under its own root directory and shm prefix, so removal is
+//! exact: nothing of another run, or of other iceoryx2 users, is touched.
+
+use std::path::Path;
+use swarmrt_protocol::services::{IPC_BASE_DIR, SHM_DIR, ipc_root_of, shm_prefix_of, valid_run_id};
+
+/// File in a run's iceoryx2 root holding the orchestrator's pid.
+pub const OWNER_FILE: &str = "swarmrt-owner.pid";
+
+/// Marks `run_id` as owned by this process (so `swarm clean` leaves it alone while we live).
+pub fn claim(run_id: &str) -> std::io::Result<()> {
+    let root = ipc_root_of(run_id);
+    std::fs::create_dir_all(&root)?;
+    std::fs::write(root.join(OWNER_FILE), std::process::id().to_string())
+}
+
+/// Removes everything of `run_id`; returns how many files and directories were removed.
+pub fn remove_run(run_id: &str) -> usize {
+    let mut removed = 0;
+    let root = ipc_root_of(run_id);
+    if root.exists() {
+        removed += count_entries(&root);
+        if let Err(e) = std::fs::remove_dir_all(&root) {
+            tracing::warn!("cannot remove {}: {e}", root.display());
+        }
+    }
+    let prefix = shm_prefix_of(run_id);
+    if let Ok(entries) = std::fs::read_dir(SHM_DIR) {
+        for e in entries.flatten() {
+            if e.file_name().to_string_lossy().starts_with(&prefix)
+                && std::fs::remove_file(e.path()).is_ok()
+            {
+                removed += 1;
+            }
+        }
+    }
+    removed
+}
+
+fn count_entries(dir: &Path) -> usize {
+    let mut n = 1;
+    if let Ok(entries) = std::fs::read_dir(dir) {
+        for e in entries.flatten() {
+            let p = e.path();
+            n += if p.is_dir() { count_entries(&p) } else { 1 };
+        }
+    }
+    n
+}
+
+/// Files of `run_id` still present (in its root and in /dev/shm); empty after a clean exit.
+pub fn leftovers(run_id: &str) -> Vec<String> {
+    let mut found = Vec::new();
+    let root = ipc_root_of(run_id);
+    if root.exists() {
+        found.push(root.display().to_string());
+    }
+    let prefix = shm_prefix_of(run_id);
+    if let Ok(entries) = std::fs::read_dir(SHM_DIR) {
+        for e in entries.flatten() {
+            if e.file_name().to_string_lossy().starts_with(&prefix) {
+                found.push(e.path().display().to_string());
+            }
+        }
+    }
+    found
+}
+
+fn pid_alive(pid: i32) -> bool {
+    // Signal 0 checks existence; EPERM still means the process exists.
+    pid > 0
+        && (unsafe { libc::kill(pid, 0) } == 0
+            || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM))
+}
+
+/// `swarm clean`: removes every run whose owning orchestrator is no longer alive.
+/// Returns (runs removed, runs left because their orchestrator still runs).
+pub fn clean_dead_runs() -> (Vec<String>, Vec<String>) {
+    let mut removed = Vec::new();
+    let mut alive = Vec::new();
+    let mut run_ids: Vec<String> = Vec::new();
+    if let Ok(entries) = std::fs::read_dir(IPC_BASE_DIR) {
+        for e in entries.flatten() {
+            run_ids.push(e.file_name().to_string_lossy().to_string());
+        }
+    }
+    // Shared memory of a run whose root directory is already gone.
+    if let Ok(entries) = std::fs::read_dir(SHM_DIR) {
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().to_string();
+            if let Some(rest) = name.strip_prefix("swarmrt_")
+                && let Some((id, _)) = rest.split_once('_')
+                && !run_ids.iter().any(|r| r == id)
+            {
+                run_ids.push(id.to_string());
+            }
+        }
+    }
+    run_ids.sort();
+    run_ids.dedup();
+    for id in run_ids {
+        if !valid_run_id(&id) {
+            continue;
+        }
+        let owner = std::fs::read_to_string(ipc_root_of(&id).join(OWNER_FILE))
+            .ok()
+            .and_then(|s| s.trim().parse::<i32>().ok());
+        if owner.is_some_and(pid_alive) {
+            alive.push(id);
+        } else {
+            remove_run(&id);
+            removed.push(id);
+        }
+    }
+    (removed, alive)
+}

@@ -1,0 +1,146 @@
+//! `swarm run`: resolve the config, run it (processes or in-process), write the run directory.
+
+use std::io::IsTerminal;
+use std::path::Path;
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde_json::json;
+use swarmrt_protocol::config::Config;
+use swarmrt_world::World;
+
+use crate::cli::RunArgs;
+use crate::error::{SwarmError, SwarmResult};
+use crate::{in_process, processes, run_dir};
+
+/// Loads and validates a config, applying `--set` overrides, and builds its map once so a
+/// bad obstacle is a user error before any process starts.
+pub fn load_config(path: &Path, set: &[String]) -> SwarmResult<Config> {
+    let cfg = Config::load(path, set)?;
+    World::new(&cfg).map_err(|e| {
+        SwarmError::User(format!(
+            "{}: key `{}`: {}",
+            path.display(),
+            e.key,
+            e.message
+        ))
+    })?;
+    Ok(cfg)
+}
+
+fn progress_bar(total: u64) -> ProgressBar {
+    let pb = ProgressBar::with_draw_target(
+        Some(total),
+        if std::io::stderr().is_terminal() {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        },
+    );
+    pb.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} ticks  {per_sec}  {elapsed_precise}")
+            .expect("valid template"),
+    );
+    pb
+}
+
+/// Runs a scenario; returns the run directory.
+pub fn run(
+    args: &RunArgs,
+    interrupt: crossbeam_channel::Receiver<()>,
+) -> SwarmResult<std::path::PathBuf> {
+    let mut set = args.set.clone();
+    if let Some(seed) = args.seed {
+        set.push(format!("scenario.seed={seed}"));
+    }
+    if let Some(ticks) = args.ticks {
+        set.push(format!("scenario.ticks={ticks}"));
+    }
+    let cfg = load_config(&args.config, &set)?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| run_dir::default_dir(&cfg));
+    let config_path = run_dir::prepare(&dir, &cfg)?;
+    let pb = progress_bar(cfg.scenario.ticks);
+    let started = Instant::now();
+    let mut metrics = json!({
+        "scenario": cfg.scenario.name,
+        "seed": cfg.scenario.seed,
+        "mode": if args.in_process { "in-process" } else { "processes" },
+        "agents": cfg.robots.count,
+    });
+
+    let failure: Option<String>;
+    if args.in_process {
+        let world = in_process::run(&cfg, &dir, |t| pb.set_position(t))?;
+        merge(
+            &mut metrics,
+            serde_json::to_value(world).map_err(anyhow::Error::from)?,
+        );
+        metrics["reproducible"] = json!(true);
+        failure = None;
+    } else {
+        let out = processes::run(&cfg, &config_path, &dir, interrupt, |t| pb.set_position(t))?;
+        if let Some(w) = out.world_metrics {
+            merge(&mut metrics, w);
+        }
+        metrics["interrupted"] = json!(out.interrupted);
+        metrics["startup_ms"] = json!(out.startup_ms);
+        metrics["unscheduled_deaths"] = json!(
+            out.unscheduled_deaths
+                .iter()
+                .map(|(id, how)| json!({"robot": id, "how": how}))
+                .collect::<Vec<_>>()
+        );
+        // An unscheduled death happens at a wall-clock moment: the run cannot be replayed.
+        metrics["reproducible"] = json!(
+            out.unscheduled_deaths.is_empty() && out.world_failure.is_none() && !out.interrupted
+        );
+        failure = out.world_failure;
+    }
+    pb.finish_and_clear();
+    let wall = started.elapsed().as_secs_f64();
+    metrics["wall_seconds"] = json!(wall);
+    let ticks = metrics["ticks"].as_u64().unwrap_or(0);
+    metrics["ticks_per_second"] = json!(if wall > 0.0 { ticks as f64 / wall } else { 0.0 });
+    metrics["failed"] = json!(failure.is_some());
+    if let Some(f) = &failure {
+        metrics["failure"] = json!(f);
+        if metrics.get("ticks").is_none() {
+            metrics["ticks"] = json!(recorded_ticks(&dir));
+        }
+    }
+    run_dir::write_metrics(&dir, &metrics)?;
+    if let Err(e) = run_dir::write_plots(&dir, &cfg) {
+        tracing::warn!("could not draw the trajectory plot: {e:#}");
+    }
+    println!("{}", dir.display());
+    if let Some(f) = failure {
+        return Err(SwarmError::Internal(anyhow::anyhow!(
+            "run failed: {f}; records up to the last tick are in {}",
+            dir.display()
+        )));
+    }
+    Ok(dir)
+}
+
+/// Last tick present in `trajectory.csv` (for runs whose world died).
+fn recorded_ticks(dir: &Path) -> u64 {
+    std::fs::read_to_string(dir.join("trajectory.csv"))
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .last()
+                .and_then(|l| l.split(',').next()?.parse().ok())
+        })
+        .unwrap_or(0)
+}
+
+fn merge(into: &mut serde_json::Value, from: serde_json::Value) {
+    if let (Some(a), serde_json::Value::Object(b)) = (into.as_object_mut(), from) {
+        for (k, v) in b {
+            a.insert(k, v);
+        }
+    }
+}

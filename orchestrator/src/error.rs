@@ -1,0 +1,39 @@
+//! User errors (exit 2, one line) versus internal failures (exit 1).
+
+use thiserror::Error;
+
+/// A failure of a `swarm` command.
+#[derive(Debug, Error)]
+pub enum SwarmError {
+    /// The user asked for something invalid: a bad config, value or path.
+    #[error("{0}")]
+    User(String),
+    /// Something broke that is not the user's fault.
+    #[error(transparent)]
+    Internal(#[from] anyhow::Error),
+}
+
+impl SwarmError {
+    /// The process exit code DESIGN section 6 promises.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            SwarmError::User(_) => 2,
+            SwarmError::Internal(_) => 1,
+        }
+    }
+}
+
+impl From<swarmrt_protocol::config::ConfigError> for SwarmError {
+    fn from(e: swarmrt_protocol::config::ConfigError) -> Self {
+        SwarmError::User(e.to_string())
+    }
+}
+
+impl From<std::io::Error> for SwarmError {
+    fn from(e: std::io::Error) -> Self {
+        SwarmError::Internal(e.into())
+    }
+}
+
+/// Result of a `swarm` command.
+pub type SwarmResult<T> = Result<T, SwarmError>;

@@ -1,0 +1,12 @@
+//! The `swarm` orchestrator: spawns a world and one process per robot, watches them,
+//! writes run directories. Also runs the same cores in-process.
+#![warn(missing_docs)]
+
+pub mod cleanup;
+pub mod cli;
+pub mod commands;
+pub mod error;
+pub mod in_process;
+pub mod plot;
+pub mod processes;
+pub mod run_dir;

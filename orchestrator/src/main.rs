@@ -1,0 +1,38 @@
+//! `swarm`: thin entry point; see `cli.rs` for the commands.
+
+use clap::Parser;
+use swarmrt_orchestrator::cli::{Cli, Cmd};
+use swarmrt_orchestrator::commands;
+use swarmrt_orchestrator::error::SwarmError;
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let (tx, rx) = crossbeam_channel::unbounded::<()>();
+    if let Err(e) = ctrlc::set_handler(move || {
+        let _ = tx.send(());
+    }) {
+        tracing::warn!("cannot install the Ctrl-C handler: {e}");
+    }
+    let result = match &cli.command {
+        Cmd::Run(args) => commands::run::run(args, rx).map(|_| ()),
+        Cmd::Check(args) => commands::check::check(args),
+        Cmd::Clean => commands::clean::clean(),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            match &e {
+                SwarmError::User(msg) => eprintln!("error: {msg}"),
+                SwarmError::Internal(err) => eprintln!("error: {err:#}"),
+            }
+            std::process::ExitCode::from(e.exit_code())
+        }
+    }
+}

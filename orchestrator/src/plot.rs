@@ -1,0 +1,859 @@
+//! The trajectory figure of a run: the map, every robot's path, start and end markers.
+//!
+//! Rendered twice with plotters, once as SVG and once as PNG. Text uses the embedded DejaVu
+//! Sans font (plotters' `ab_glyph` feature), so no system font library is needed.
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use anyhow::{Context, anyhow};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use swarmrt_protocol::RobotState;
+use swarmrt_protocol::config::Config;
+
+/// One robot's path for the plot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotTrack {
+    /// The robot id.
+    pub id: u32,
+    /// Positions in tick order; the first is the start.
+    pub points: Vec<(f64, f64)>,
+    /// The robot's state at the end of the run.
+    pub final_state: RobotState,
+}
+
+/// The embedded font, registered with plotters as "sans-serif".
+static FONT_BYTES: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+
+/// Length of the long side of the figure in pixels.
+const LONG_SIDE: u32 = 900;
+/// Height of the title line in the header, pixels.
+const TITLE_H: u32 = 40;
+/// Height of one legend row in the header, pixels.
+const LEGEND_ROW_H: u32 = 24;
+/// Gap between the header and the top of the plot area, room for the top tick label.
+const TOP_GAP: u32 = 10;
+/// Width of the y label area (tick labels and "y (m)").
+const LEFT: u32 = 72;
+/// Height of the x label area (tick labels and "x (m)").
+const BOTTOM: u32 = 56;
+/// Right margin, room for the last x tick label.
+const RIGHT: u32 = 28;
+/// Smallest plot area width, so the title fits (the legend wraps).
+const MIN_PLOT_W: u32 = 460;
+/// Smallest plot area height, so a very flat map still reads.
+const MIN_PLOT_H: u32 = 200;
+
+/// Qualitative palette for the first robots (tab10 without red, green and grey, which mean
+/// "down or dead", "goal" and "obstacle" here).
+const PALETTE: [RGBColor; 7] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+const OBSTACLE_FILL: RGBColor = RGBColor(170, 170, 170);
+const OBSTACLE_EDGE: RGBColor = RGBColor(110, 110, 110);
+const GOAL: RGBColor = RGBColor(0, 150, 0);
+const CROSS: RGBColor = RGBColor(214, 39, 40);
+const LEGEND_INK: RGBColor = RGBColor(60, 60, 60);
+
+/// Registers the embedded font once; later calls return the first outcome.
+fn ensure_font() -> anyhow::Result<()> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT_BYTES).is_ok()
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(anyhow!("the embedded plot font could not be loaded"))
+    }
+}
+
+/// Colour of the `i`-th track: the palette first, then golden-angle hues.
+fn track_colour(i: usize) -> RGBColor {
+    if let Some(c) = PALETTE.get(i) {
+        return *c;
+    }
+    let hue = (i as f64 * 0.618_033_988_75).fract();
+    let light = if i % 2 == 0 { 0.42 } else { 0.55 };
+    let bc = HSLColor(hue, 0.70, light).to_backend_color();
+    RGBColor(bc.rgb.0, bc.rgb.1, bc.rgb.2)
+}
+
+/// Pixel geometry of the figure and the data window it shows (equal scale on both axes).
+#[derive(Debug, Clone, PartialEq)]
+struct Layout {
+    width: u32,
+    height: u32,
+    /// Header height (title and legend rows) in pixels.
+    header: u32,
+    /// Legend items (indices into [`LEGEND`]) per row.
+    legend: Vec<Vec<usize>>,
+    plot_w: u32,
+    plot_h: u32,
+    x: (f64, f64),
+    y: (f64, f64),
+    /// Pixels per metre.
+    scale: f64,
+}
+
+/// Running bounding box over finite points.
+#[derive(Debug, Clone, Copy)]
+struct BBox {
+    min_x: f64,
+    min_y: f64,
+    max_x: f64,
+    max_y: f64,
+}
+
+impl BBox {
+    fn empty() -> Self {
+        BBox {
+            min_x: f64::INFINITY,
+            min_y: f64::INFINITY,
+            max_x: f64::NEG_INFINITY,
+            max_y: f64::NEG_INFINITY,
+        }
+    }
+
+    fn add(&mut self, x: f64, y: f64) {
+        if x.is_finite() && y.is_finite() {
+            self.min_x = self.min_x.min(x);
+            self.min_y = self.min_y.min(y);
+            self.max_x = self.max_x.max(x);
+            self.max_y = self.max_y.max(y);
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.min_x > self.max_x || self.min_y > self.max_y
+    }
+}
+
+/// The region that must be visible: bounds, goal, obstacles and every track point.
+fn content_box(cfg: &Config, tracks: &[RobotTrack]) -> BBox {
+    let map = &cfg.map;
+    let mut b = BBox::empty();
+    let [x0, y0, x1, y1] = map.bounds;
+    b.add(x0, y0);
+    b.add(x1, y1);
+    let g = map.goal;
+    b.add(g.x - g.radius.abs(), g.y - g.radius.abs());
+    b.add(g.x + g.radius.abs(), g.y + g.radius.abs());
+    for c in &map.circles {
+        b.add(c.x - c.r.abs(), c.y - c.r.abs());
+        b.add(c.x + c.r.abs(), c.y + c.r.abs());
+    }
+    for r in &map.rectangles {
+        b.add(r.x_min, r.y_min);
+        b.add(r.x_max, r.y_max);
+    }
+    for p in map.polygons.iter().flat_map(|p| p.points.iter()) {
+        b.add(p[0], p[1]);
+    }
+    for &(x, y) in tracks.iter().flat_map(|t| t.points.iter()) {
+        b.add(x, y);
+    }
+    if b.is_empty() {
+        b = BBox {
+            min_x: 0.0,
+            min_y: 0.0,
+            max_x: 1.0,
+            max_y: 1.0,
+        };
+    }
+    b
+}
+
+/// Centred window of width `span` around the middle of `[lo, hi]`.
+fn centred(lo: f64, hi: f64, span: f64) -> (f64, f64) {
+    let mid = lo / 2.0 + hi / 2.0;
+    (mid - span / 2.0, mid + span / 2.0)
+}
+
+/// Chooses the figure size (long side [`LONG_SIDE`]) and a data window with equal scale.
+fn layout(cfg: &Config, tracks: &[RobotTrack]) -> Layout {
+    let b = content_box(cfg, tracks);
+    // Spans, never zero (and never overflowing to infinity for huge coordinates).
+    let min_span = |lo: f64, hi: f64| {
+        let s = hi / 2.0 - lo / 2.0;
+        let floor = (lo.abs().max(hi.abs()) * 1e-9).max(1e-6);
+        if s.is_finite() {
+            s.max(floor)
+        } else {
+            f64::MAX / 4.0
+        }
+    };
+    let half_dx = min_span(b.min_x, b.max_x);
+    let half_dy = min_span(b.min_y, b.max_y);
+    // A small margin around the content, the same in metres on every side.
+    let pad = half_dx.max(half_dy) * 0.06;
+    let dx = 2.0 * (half_dx + pad);
+    let dy = 2.0 * (half_dy + pad);
+
+    let widths = legend_widths();
+    let mut rows = 1;
+    let mut guard = 0;
+    loop {
+        let header = header_height(rows);
+        let avail_w = f64::from(LONG_SIDE - LEFT - RIGHT);
+        let avail_h = f64::from(LONG_SIDE - header - TOP_GAP - BOTTOM);
+        let scale = (avail_w / dx).min(avail_h / dy);
+        let plot_w = ((dx * scale).round() as u32).clamp(MIN_PLOT_W, avail_w as u32);
+        let plot_h = ((dy * scale).round() as u32).clamp(MIN_PLOT_H, avail_h as u32);
+        let width = LEFT + plot_w + RIGHT;
+        let legend = legend_rows(width, &widths);
+        guard += 1;
+        if legend.len() > rows && guard < LEGEND.len() {
+            // A narrower figure needs more legend rows: recompute with a taller header.
+            rows = legend.len();
+            continue;
+        }
+        // Re-derive the window from the whole pixel sizes so both axes share one scale.
+        let x = centred(b.min_x, b.max_x, f64::from(plot_w) / scale);
+        let y = centred(b.min_y, b.max_y, f64::from(plot_h) / scale);
+        return Layout {
+            width,
+            height: header + TOP_GAP + plot_h + BOTTOM,
+            header,
+            legend,
+            plot_w,
+            plot_h,
+            x,
+            y,
+            scale,
+        };
+    }
+}
+
+/// Header height for a legend of `rows` rows.
+fn header_height(rows: usize) -> u32 {
+    TITLE_H + LEGEND_ROW_H * rows.max(1) as u32 + 6
+}
+
+/// Legend markers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Mark {
+    Path,
+    Start,
+    EndActive,
+    EndDown,
+    Goal,
+    Obstacle,
+}
+
+/// The legend: marker and label.
+const LEGEND: [(Mark, &str); 6] = [
+    (Mark::Path, "path (one colour per robot)"),
+    (Mark::Start, "start"),
+    (Mark::EndActive, "end, active"),
+    (Mark::EndDown, "end, down/dead"),
+    (Mark::Goal, "goal"),
+    (Mark::Obstacle, "obstacle"),
+];
+/// Legend font size.
+const LEGEND_FONT: f64 = 14.0;
+/// Width of a legend marker, gap to its label, gap between items (pixels).
+const MARKER_W: i32 = 22;
+const MARKER_GAP: i32 = 6;
+const ITEM_GAP: i32 = 18;
+
+/// Pixel width of each legend item (marker and label) in the embedded font.
+fn legend_widths() -> Vec<i32> {
+    let font = ("sans-serif", LEGEND_FONT).into_font();
+    LEGEND
+        .iter()
+        .map(|(_, label)| {
+            let text_w = font
+                .box_size(label)
+                .map(|(w, _)| w as i32)
+                .unwrap_or(label.len() as i32 * 8);
+            MARKER_W + MARKER_GAP + text_w
+        })
+        .collect()
+}
+
+/// Greedy wrapping of the legend items into rows that fit `width` pixels.
+fn legend_rows(width: u32, widths: &[i32]) -> Vec<Vec<usize>> {
+    let avail = width as i32 - 16;
+    let mut rows: Vec<Vec<usize>> = vec![Vec::new()];
+    let mut used = 0;
+    for (i, &w) in widths.iter().enumerate() {
+        let row = rows.last_mut().expect("at least one row");
+        if !row.is_empty() && used + ITEM_GAP + w > avail {
+            rows.push(vec![i]);
+            used = w;
+        } else {
+            used += if row.is_empty() { w } else { ITEM_GAP + w };
+            row.push(i);
+        }
+    }
+    rows
+}
+
+/// Tick label text: fixed decimals chosen from the span, scientific for huge values.
+fn tick_label(v: f64, span: f64, max_abs: f64) -> String {
+    if max_abs >= 1e5 {
+        return format!("{v:.2e}");
+    }
+    let decimals = (1.0 - span.log10().floor()).clamp(0.0, 6.0) as usize;
+    let s = format!("{v:.decimals$}");
+    // Avoid "-0" and "-0.0".
+    if s.trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        s.trim_start_matches('-').to_string()
+    } else {
+        s
+    }
+}
+
+/// Title text: "<scenario name> seed <seed>: N robots".
+fn title(cfg: &Config, n: usize) -> String {
+    let noun = if n == 1 { "robot" } else { "robots" };
+    format!(
+        "{} seed {}: {n} {noun}",
+        cfg.scenario.name, cfg.scenario.seed
+    )
+}
+
+/// Points of a closed circle polygon in data coordinates.
+fn circle_points(cx: f64, cy: f64, r: f64) -> Vec<(f64, f64)> {
+    const N: usize = 72;
+    (0..=N)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / N as f64;
+            (cx + r * a.cos(), cy + r * a.sin())
+        })
+        .collect()
+}
+
+/// Turns a plotters drawing error into an `anyhow::Error` (their error types are not `'static`
+/// for every backend, so keep only the message).
+fn draw_err<E: std::fmt::Display>(what: &'static str) -> impl FnOnce(E) -> anyhow::Error {
+    move |e| anyhow!("drawing the trajectory plot ({what}): {e}")
+}
+
+/// Draws the header: the title on the first line and the marker legend below it.
+fn draw_header<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    lay: &Layout,
+    title_text: &str,
+) -> anyhow::Result<()> {
+    let w = lay.width as i32;
+    // Title, shrunk if the scenario name is very long.
+    let mut size = 22.0;
+    let mut style = TextStyle::from(("sans-serif", size).into_font()).color(&BLACK);
+    while size > 10.0 {
+        let (tw, _) = area
+            .estimate_text_size(title_text, &style)
+            .map_err(draw_err("title size"))?;
+        if (tw as i32) < w - 20 {
+            break;
+        }
+        size -= 1.0;
+        style = TextStyle::from(("sans-serif", size).into_font()).color(&BLACK);
+    }
+    let style = style.pos(Pos::new(HPos::Center, VPos::Top));
+    area.draw_text(title_text, &style, (w / 2, 8))
+        .map_err(draw_err("title"))?;
+
+    // Legend: rows of (marker, label) pairs, each row centred.
+    let label_style = TextStyle::from(("sans-serif", LEGEND_FONT).into_font())
+        .color(&LEGEND_INK)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    let widths = legend_widths();
+    for (r, row) in lay.legend.iter().enumerate() {
+        let total: i32 =
+            row.iter().map(|&i| widths[i]).sum::<i32>() + ITEM_GAP * (row.len() as i32 - 1).max(0);
+        let mut x = ((w - total) / 2).max(4);
+        let y = (TITLE_H + LEGEND_ROW_H * r as u32 + LEGEND_ROW_H / 2) as i32;
+        for &i in row {
+            let (mark, label) = LEGEND[i];
+            draw_legend_mark(area, mark, x, y)?;
+            area.draw_text(label, &label_style, (x + MARKER_W + MARKER_GAP, y))
+                .map_err(draw_err("legend label"))?;
+            x += widths[i] + ITEM_GAP;
+        }
+    }
+    Ok(())
+}
+
+/// Draws one legend marker in the box starting at `x`, centred vertically on `y`.
+fn draw_legend_mark<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    mark: Mark,
+    x: i32,
+    y: i32,
+) -> anyhow::Result<()> {
+    let cx = x + MARKER_W / 2;
+    let ink = LEGEND_INK;
+    let res = match mark {
+        Mark::Path => area.draw(&PathElement::new(
+            vec![(x, y), (x + MARKER_W, y)],
+            PALETTE[0].stroke_width(2),
+        )),
+        Mark::Start => area.draw(&Circle::new((cx, y), 6, ink.stroke_width(1))),
+        Mark::EndActive => area.draw(&Circle::new((cx, y), 5, ink.filled())),
+        Mark::EndDown => area
+            .draw(&PathElement::new(
+                vec![(cx - 5, y - 5), (cx + 5, y + 5)],
+                CROSS.stroke_width(2),
+            ))
+            .and_then(|()| {
+                area.draw(&PathElement::new(
+                    vec![(cx - 5, y + 5), (cx + 5, y - 5)],
+                    CROSS.stroke_width(2),
+                ))
+            }),
+        Mark::Goal => area
+            .draw(&Circle::new((cx, y), 8, GOAL.mix(0.12).filled()))
+            .and_then(|()| area.draw(&Circle::new((cx, y), 8, GOAL.stroke_width(2)))),
+        Mark::Obstacle => {
+            let corners = [(cx - 7, y - 7), (cx + 7, y + 7)];
+            area.draw(&Rectangle::new(corners, OBSTACLE_FILL.filled()))
+                .and_then(|()| area.draw(&Rectangle::new(corners, OBSTACLE_EDGE.stroke_width(1))))
+        }
+    };
+    res.map_err(draw_err("legend marker"))
+}
+
+/// Draws the whole figure on `root`, whose size is `lay.width` x `lay.height`.
+fn draw_figure<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    lay: &Layout,
+    cfg: &Config,
+    tracks: &[RobotTrack],
+) -> anyhow::Result<()> {
+    root.fill(&WHITE).map_err(draw_err("background"))?;
+    let (header, body) = root.split_vertically(lay.header + TOP_GAP);
+    draw_header(&header, lay, &title(cfg, tracks.len()))?;
+
+    let body = body.margin(0, 0, 0, RIGHT);
+    let span = (lay.x.1 - lay.x.0).max(lay.y.1 - lay.y.0);
+    let max_abs = [lay.x.0, lay.x.1, lay.y.0, lay.y.1]
+        .iter()
+        .fold(0.0_f64, |m, v| m.max(v.abs()));
+    let fmt = move |v: &f64| tick_label(*v, span, max_abs);
+
+    let mut chart = ChartBuilder::on(&body)
+        .x_label_area_size(BOTTOM)
+        .y_label_area_size(LEFT)
+        .build_cartesian_2d(lay.x.0..lay.x.1, lay.y.0..lay.y.1)
+        .map_err(draw_err("axes"))?;
+    chart
+        .configure_mesh()
+        .x_desc("x (m)")
+        .y_desc("y (m)")
+        .x_labels((lay.plot_w / 90).max(3) as usize)
+        .y_labels((lay.plot_h / 70).max(3) as usize)
+        .x_label_formatter(&fmt)
+        .y_label_formatter(&fmt)
+        .label_style(("sans-serif", 14.0))
+        .axis_desc_style(("sans-serif", 16.0))
+        .bold_line_style(BLACK.mix(0.08))
+        .light_line_style(TRANSPARENT)
+        .axis_style(BLACK.stroke_width(1))
+        .draw()
+        .map_err(draw_err("mesh"))?;
+
+    let map = &cfg.map;
+    let area = chart.plotting_area();
+    let px = |metres: f64, lo: f64, hi: f64| (metres.abs() * lay.scale).clamp(lo, hi);
+
+    // Goal (under everything), obstacles, then the arena walls.
+    let goal_ring = circle_points(map.goal.x, map.goal.y, map.goal.radius.abs());
+    area.draw(&Polygon::new(goal_ring.clone(), GOAL.mix(0.12).filled()))
+        .map_err(draw_err("goal"))?;
+    for c in &map.circles {
+        let ring = circle_points(c.x, c.y, c.r.abs());
+        area.draw(&Polygon::new(ring.clone(), OBSTACLE_FILL.filled()))
+            .and_then(|()| area.draw(&PathElement::new(ring, OBSTACLE_EDGE.stroke_width(1))))
+            .map_err(draw_err("circle obstacle"))?;
+    }
+    for r in &map.rectangles {
+        let corners = [(r.x_min, r.y_min), (r.x_max, r.y_max)];
+        area.draw(&Rectangle::new(corners, OBSTACLE_FILL.filled()))
+            .and_then(|()| area.draw(&Rectangle::new(corners, OBSTACLE_EDGE.stroke_width(1))))
+            .map_err(draw_err("rectangle obstacle"))?;
+    }
+    for p in &map.polygons {
+        let pts: Vec<(f64, f64)> = p.points.iter().map(|q| (q[0], q[1])).collect();
+        if pts.is_empty() {
+            continue;
+        }
+        let mut ring = pts.clone();
+        ring.push(pts[0]);
+        area.draw(&Polygon::new(pts, OBSTACLE_FILL.filled()))
+            .and_then(|()| area.draw(&PathElement::new(ring, OBSTACLE_EDGE.stroke_width(1))))
+            .map_err(draw_err("polygon obstacle"))?;
+    }
+    let [bx0, by0, bx1, by1] = map.bounds;
+    area.draw(&Rectangle::new(
+        [(bx0, by0), (bx1, by1)],
+        BLACK.stroke_width(2),
+    ))
+    .map_err(draw_err("bounds"))?;
+    area.draw(&PathElement::new(goal_ring, GOAL.stroke_width(2)))
+        .map_err(draw_err("goal"))?;
+
+    // Paths first, markers on top of all paths.
+    let line_w = if tracks.len() <= 30 { 2 } else { 1 };
+    let clean: Vec<Vec<(f64, f64)>> = tracks
+        .iter()
+        .map(|t| {
+            t.points
+                .iter()
+                .copied()
+                .filter(|(x, y)| x.is_finite() && y.is_finite())
+                .collect()
+        })
+        .collect();
+    for (i, pts) in clean.iter().enumerate() {
+        let Some(&first) = pts.first() else { continue };
+        let mut path = pts.clone();
+        if path.len() == 1 {
+            path.push(first);
+        }
+        area.draw(&PathElement::new(
+            path,
+            track_colour(i).stroke_width(line_w),
+        ))
+        .map_err(draw_err("path"))?;
+    }
+    let body_r = px(cfg.robots.radius, 3.0, 30.0).round() as i32;
+    let dot_r = px(cfg.robots.radius, 2.5, 30.0).round() as i32;
+    let arm = body_r.max(4);
+    for (i, pts) in clean.iter().enumerate() {
+        let (Some(&start), Some(&end)) = (pts.first(), pts.last()) else {
+            continue;
+        };
+        let colour = track_colour(i);
+        area.draw(&Circle::new(start, body_r, colour.stroke_width(line_w)))
+            .map_err(draw_err("start marker"))?;
+        let end_marker = match tracks[i].final_state {
+            RobotState::Active => area.draw(&Circle::new(end, dot_r, colour.filled())),
+            RobotState::Down | RobotState::Dead => {
+                let style = CROSS.stroke_width(2);
+                area.draw(
+                    &(EmptyElement::at(end)
+                        + PathElement::new(vec![(-arm, -arm), (arm, arm)], style)
+                        + PathElement::new(vec![(-arm, arm), (arm, -arm)], style)),
+                )
+            }
+        };
+        end_marker.map_err(draw_err("end marker"))?;
+    }
+    Ok(())
+}
+
+/// Draws the map (bounds as a frame, obstacles filled grey, goal as a green disc outline), each robot's path in a distinct colour, start positions (hollow circle of robot radius), end positions (filled dot when Active, a red cross when Down or Dead), and a title "<scenario name> seed <seed>: N robots" plus a small legend for the markers. Writes both an SVG and a PNG (about 900 px on the long side, aspect ratio of the map kept, axis labels in metres).
+pub fn write_trajectory_plots(
+    cfg: &Config,
+    tracks: &[RobotTrack],
+    svg_path: &Path,
+    png_path: &Path,
+) -> anyhow::Result<()> {
+    ensure_font()?;
+    let lay = layout(cfg, tracks);
+    let size = (lay.width, lay.height);
+
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        draw_figure(&root, &lay, cfg, tracks)?;
+        root.present().map_err(draw_err("svg"))?;
+    }
+    std::fs::write(svg_path, svg)
+        .with_context(|| format!("writing trajectory plot {}", svg_path.display()))?;
+
+    // Create the file first so an unwritable path gets a clear I/O error.
+    std::fs::File::create(png_path)
+        .with_context(|| format!("writing trajectory plot {}", png_path.display()))?;
+    let root = BitMapBackend::new(png_path, size).into_drawing_area();
+    draw_figure(&root, &lay, cfg, tracks)?;
+    root.present()
+        .map_err(|e| anyhow!("writing trajectory plot {}: {e}", png_path.display()))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use swarmrt_protocol::config::{CircleObstacle, PolygonObstacle, RectObstacle};
+
+    /// A small scenario with one obstacle of each kind.
+    fn config(bounds: [f64; 4]) -> Config {
+        let [x0, y0, x1, y1] = bounds;
+        let text = format!(
+            r#"
+[scenario]
+name = "plot-test"
+seed = 42
+ticks = 10
+
+[map]
+bounds = [{x0:?}, {y0:?}, {x1:?}, {y1:?}]
+goal = {{ x = {gx:?}, y = {gy:?}, radius = 1.0 }}
+
+[robots]
+count = 3
+radius = 0.2
+"#,
+            gx = x1 - (x1 - x0) * 0.1,
+            gy = y1 - (y1 - y0) * 0.2,
+        );
+        let mut cfg = Config::from_toml_str("plot-test.toml", &text, &[]).expect("test config");
+        cfg.map.circles.push(CircleObstacle {
+            x: x0 + (x1 - x0) * 0.5,
+            y: y0 + (y1 - y0) * 0.5,
+            r: (y1 - y0) * 0.1,
+        });
+        cfg.map.rectangles.push(RectObstacle {
+            x_min: x0 + (x1 - x0) * 0.25,
+            y_min: y0 + (y1 - y0) * 0.1,
+            x_max: x0 + (x1 - x0) * 0.3,
+            y_max: y0 + (y1 - y0) * 0.4,
+        });
+        cfg.map.polygons.push(PolygonObstacle {
+            points: vec![
+                [x0 + (x1 - x0) * 0.65, y0 + (y1 - y0) * 0.7],
+                [x0 + (x1 - x0) * 0.75, y0 + (y1 - y0) * 0.7],
+                [x0 + (x1 - x0) * 0.7, y0 + (y1 - y0) * 0.9],
+            ],
+        });
+        cfg
+    }
+
+    /// Three paths from the lower left towards the goal, in map fractions scaled to `cfg`.
+    fn three_tracks(cfg: &Config) -> Vec<RobotTrack> {
+        let [x0, y0, x1, y1] = cfg.map.bounds;
+        let path = |sx: f64, sy: f64, ex: f64, ey: f64, n: usize| -> Vec<(f64, f64)> {
+            (0..n)
+                .map(|k| {
+                    let t = k as f64 / (n - 1) as f64;
+                    let fx = sx + (ex - sx) * t;
+                    let fy = sy + (ey - sy) * t + (t * 9.0).sin() * 0.04;
+                    (x0 + fx * (x1 - x0), y0 + fy * (y1 - y0))
+                })
+                .collect()
+        };
+        vec![
+            RobotTrack {
+                id: 0,
+                points: path(0.08, 0.15, 0.88, 0.78, 80),
+                final_state: RobotState::Active,
+            },
+            RobotTrack {
+                id: 1,
+                points: path(0.08, 0.25, 0.55, 0.55, 50),
+                final_state: RobotState::Down,
+            },
+            RobotTrack {
+                id: 2,
+                points: path(0.14, 0.2, 0.6, 0.25, 60),
+                final_state: RobotState::Dead,
+            },
+        ]
+    }
+
+    /// Width and height from the PNG IHDR chunk.
+    fn png_size(bytes: &[u8]) -> (u32, u32) {
+        let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
+        let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
+        (w, h)
+    }
+
+    pub(super) fn config_pub(b: [f64; 4]) -> Config {
+        config(b)
+    }
+    pub(super) fn three_tracks_pub(c: &Config) -> Vec<RobotTrack> {
+        three_tracks(c)
+    }
+    const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
+
+    fn render(cfg: &Config, tracks: &[RobotTrack]) -> (String, Vec<u8>) {
+        let dir = tempfile::tempdir().unwrap();
+        let svg = dir.path().join("trajectories.svg");
+        let png = dir.path().join("trajectories.png");
+        write_trajectory_plots(cfg, tracks, &svg, &png).unwrap();
+        (
+            std::fs::read_to_string(&svg).unwrap(),
+            std::fs::read(&png).unwrap(),
+        )
+    }
+
+    #[test]
+    fn plot_writes_svg_and_png() {
+        let cfg = config([0.0, 0.0, 20.0, 10.0]);
+        let tracks = three_tracks(&cfg);
+        let (svg, png) = render(&cfg, &tracks);
+
+        assert!(svg.contains("<svg"));
+        assert!(svg.contains("plot-test seed 42: 3 robots"));
+        assert!(svg.contains("x (m)") && svg.contains("y (m)"));
+        // Each track is drawn as a polyline in its own colour.
+        for i in 0..tracks.len() {
+            let c = track_colour(i);
+            let stroke = format!("stroke=\"#{:02X}{:02X}{:02X}\"", c.0, c.1, c.2);
+            let found = svg
+                .split('<')
+                .any(|el| el.starts_with("polyline") && el.contains(&stroke));
+            assert!(found, "no polyline with {stroke} for track {i}");
+        }
+
+        assert_eq!(png[..8], PNG_SIGNATURE);
+        // A wide map: the width is the long side.
+        let (w, h) = png_size(&png);
+        assert_eq!(w, LONG_SIDE);
+        assert!(h < w, "height {h} for a 2:1 map");
+    }
+
+    #[test]
+    fn plot_tall_map_keeps_long_side_vertical() {
+        let cfg = config([-5.0, -10.0, 5.0, 10.0]);
+        let (_, png) = render(&cfg, &three_tracks(&cfg));
+        assert_eq!(png[..8], PNG_SIGNATURE);
+        let (w, h) = png_size(&png);
+        assert_eq!(h, LONG_SIDE);
+        assert!(w < h, "width {w} for a 1:2 map");
+    }
+
+    #[test]
+    fn plot_layout_keeps_equal_scale() {
+        let cfg = config([0.0, 0.0, 20.0, 10.0]);
+        ensure_font().unwrap();
+        let lay = layout(&cfg, &three_tracks(&cfg));
+        let sx = f64::from(lay.plot_w) / (lay.x.1 - lay.x.0);
+        let sy = f64::from(lay.plot_h) / (lay.y.1 - lay.y.0);
+        assert!((sx - sy).abs() / sx < 1e-9, "x scale {sx} vs y scale {sy}");
+        assert!(lay.x.0 < 0.0 && lay.x.1 > 20.0 && lay.y.0 < 0.0 && lay.y.1 > 10.0);
+    }
+
+    #[test]
+    fn plot_unwritable_path_is_an_error() {
+        let cfg = config([0.0, 0.0, 20.0, 10.0]);
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("no-such-dir");
+        let ok_svg = dir.path().join("ok.svg");
+        let ok_png = dir.path().join("ok.png");
+        let tracks = three_tracks(&cfg);
+        assert!(write_trajectory_plots(&cfg, &tracks, &missing.join("a.svg"), &ok_png).is_err());
+        assert!(write_trajectory_plots(&cfg, &tracks, &ok_svg, &missing.join("a.png")).is_err());
+    }
+
+    #[test]
+    fn plot_zero_tracks() {
+        let cfg = config([0.0, 0.0, 20.0, 10.0]);
+        let (svg, png) = render(&cfg, &[]);
+        assert!(svg.contains("plot-test seed 42: 0 robots"));
+        assert_eq!(png[..8], PNG_SIGNATURE);
+    }
+
+    #[test]
+    fn plot_many_tracks_and_degenerate_ones() {
+        let cfg = config([0.0, 0.0, 20.0, 10.0]);
+        let mut tracks: Vec<RobotTrack> = (0..300u32)
+            .map(|id| {
+                let y = 0.2 + f64::from(id) * 0.03;
+                RobotTrack {
+                    id,
+                    points: (0..40).map(|k| (1.0 + f64::from(k) * 0.4, y)).collect(),
+                    final_state: match id % 3 {
+                        0 => RobotState::Active,
+                        1 => RobotState::Down,
+                        _ => RobotState::Dead,
+                    },
+                }
+            })
+            .collect();
+        tracks.push(RobotTrack {
+            id: 300,
+            points: vec![(5.0, 5.0)],
+            final_state: RobotState::Active,
+        });
+        tracks.push(RobotTrack {
+            id: 301,
+            points: vec![],
+            final_state: RobotState::Dead,
+        });
+        let (svg, png) = render(&cfg, &tracks);
+        assert!(svg.contains("302 robots"));
+        assert!(svg.matches("<polyline").count() >= 301);
+        assert_eq!(png[..8], PNG_SIGNATURE);
+    }
+
+    #[test]
+    fn plot_large_coordinates() {
+        let mut cfg = config([0.0, 0.0, 20.0, 10.0]);
+        cfg.map.bounds = [-1e9, -1e9, 1e9, 1e9];
+        let tracks = vec![RobotTrack {
+            id: 0,
+            points: vec![(-5e8, 0.0), (3e9, 2e9)],
+            final_state: RobotState::Down,
+        }];
+        let (_, png) = render(&cfg, &tracks);
+        assert_eq!(png[..8], PNG_SIGNATURE);
+        let (w, h) = png_size(&png);
+        assert_eq!(w.max(h), LONG_SIDE);
+    }
+}
+#[cfg(test)]
+mod tmp_example {
+    use super::*;
+    #[test]
+    fn tmp_render_examples() {
+        let Ok(dir) = std::env::var("PLOT_EXAMPLE_DIR") else {
+            return;
+        };
+        let dir = std::path::PathBuf::from(dir);
+        for (name, b) in [
+            ("wide", [0.0, 0.0, 20.0, 10.0]),
+            ("tall", [-5.0, -10.0, 5.0, 10.0]),
+            ("square", [0.0, 0.0, 12.0, 12.0]),
+        ] {
+            let cfg = super::tests::config_pub(b);
+            let tracks = super::tests::three_tracks_pub(&cfg);
+            write_trajectory_plots(
+                &cfg,
+                &tracks,
+                &dir.join(format!("{name}.svg")),
+                &dir.join(format!("{name}.png")),
+            )
+            .unwrap();
+        }
+        let cfg = super::tests::config_pub([0.0, 0.0, 20.0, 10.0]);
+        let tracks: Vec<RobotTrack> = (0..300u32)
+            .map(|id| {
+                let a = f64::from(id) * 0.021;
+                RobotTrack {
+                    id,
+                    points: (0..60)
+                        .map(|k| {
+                            let r = 0.5 + f64::from(k) * 0.07;
+                            (
+                                10.0 + r * (a + f64::from(k) * 0.03).cos() * 1.8,
+                                5.0 + r * (a + f64::from(k) * 0.03).sin(),
+                            )
+                        })
+                        .collect(),
+                    final_state: if id % 7 == 0 {
+                        RobotState::Dead
+                    } else {
+                        RobotState::Active
+                    },
+                }
+            })
+            .collect();
+        write_trajectory_plots(&cfg, &tracks, &dir.join("many.svg"), &dir.join("many.png"))
+            .unwrap();
+    }
+}

@@ -1,0 +1,366 @@
+//! Multi-process mode: spawn the world and one process per robot, watch them, tell the world
+//! when a robot dies, stop everything cleanly on completion, Ctrl-C or a crashed child, and
+//! remove the run's iceoryx2 resources on every path.
+//!
+//! Three threads feed one channel the main loop sleeps on: the world's stdout reader
+//! (reports), the reaper (`waitpid` on every child, so iceoryx2 never sees zombies) and the
+//! Ctrl-C handler. No polling.
+
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader, Write};
+use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
+use std::process::{ChildStdin, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, bail};
+use crossbeam_channel::{Receiver, Sender};
+use swarmrt_protocol::config::Config;
+use swarmrt_protocol::control::{Control, Report};
+use swarmrt_protocol::services::RunServices;
+
+use crate::cleanup;
+
+/// How long children get to exit by themselves after the run ended before they are killed.
+const EXIT_GRACE: Duration = Duration::from_secs(10);
+
+/// How `describe` renders a robot's clean exit after the world's shutdown sample.
+const CLEAN_EXIT: &str = "exited with code 0";
+
+/// What the supervisor learned about a run.
+#[derive(Debug, Default)]
+pub struct ProcessOutcome {
+    /// The world's final report, if it made one.
+    pub world_metrics: Option<serde_json::Value>,
+    /// True when the run ended early (Ctrl-C or a Stop).
+    pub interrupted: bool,
+    /// Set when the world itself failed; the run's records stop at its last tick.
+    pub world_failure: Option<String>,
+    /// Robots whose process ended before the run did, with how.
+    pub unscheduled_deaths: BTreeMap<u32, String>,
+    /// Milliseconds from the world listening until every robot said hello.
+    pub startup_ms: Option<u64>,
+}
+
+enum Msg {
+    Report(Report),
+    WorldEof,
+    Exited { pid: i32, how: String },
+    Interrupt,
+}
+
+/// A fresh run id: random, used only in names (never in a decision).
+pub fn new_run_id() -> String {
+    use std::hash::{BuildHasher, RandomState};
+    let h = RandomState::new().hash_one((std::process::id(), Instant::now()));
+    format!("{:012x}", h & 0xffff_ffff_ffff)
+}
+
+/// Finds `swarm-world` / `swarm-agent` beside the running executable.
+pub fn sibling_binary(name: &str) -> anyhow::Result<PathBuf> {
+    let exe = std::env::current_exe().context("cannot locate the swarm executable")?;
+    let dir = exe.parent().context("executable has no directory")?;
+    let p = dir.join(name);
+    if p.exists() {
+        return Ok(p);
+    }
+    // `cargo test` runs from target/<profile>/deps/.
+    if let Some(up) = dir.parent() {
+        let p = up.join(name);
+        if p.exists() {
+            return Ok(p);
+        }
+    }
+    bail!(
+        "cannot find {name} beside {}; build the whole workspace (cargo build --release)",
+        exe.display()
+    )
+}
+
+fn child_command(bin: &Path) -> Command {
+    let mut cmd = Command::new(bin);
+    // Own process group: a terminal's Ctrl-C reaches only the orchestrator, which then stops
+    // the run in order. If the orchestrator dies, the child gets SIGTERM and exits cleanly.
+    cmd.process_group(0);
+    unsafe {
+        cmd.pre_exec(|| {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    cmd
+}
+
+fn describe(status: i32) -> String {
+    if libc::WIFSIGNALED(status) {
+        format!("killed by signal {}", libc::WTERMSIG(status))
+    } else if libc::WIFEXITED(status) {
+        format!("exited with code {}", libc::WEXITSTATUS(status))
+    } else {
+        format!("ended with status {status}")
+    }
+}
+
+fn spawn_reaper(tx: Sender<Msg>) {
+    std::thread::spawn(move || {
+        loop {
+            let mut status = 0;
+            let pid = unsafe { libc::waitpid(-1, &mut status, 0) };
+            if pid > 0 {
+                if tx
+                    .send(Msg::Exited {
+                        pid,
+                        how: describe(status),
+                    })
+                    .is_err()
+                {
+                    return;
+                }
+            } else if std::io::Error::last_os_error().raw_os_error() == Some(libc::EINTR) {
+                continue;
+            } else {
+                return; // ECHILD: every child has been reaped.
+            }
+        }
+    });
+}
+
+fn send_control(stdin: &mut Option<ChildStdin>, c: &Control) {
+    if let Some(s) = stdin.as_mut()
+        && s.write_all(c.to_line().as_bytes())
+            .and_then(|_| s.flush())
+            .is_err()
+    {
+        *stdin = None;
+    }
+}
+
+fn signal_all(pids: &[i32], sig: i32) {
+    for &p in pids {
+        unsafe {
+            libc::kill(p, sig);
+        }
+    }
+}
+
+/// Runs `cfg` as processes; records go to `dir`. `progress` sees completed ticks.
+pub fn run(
+    cfg: &Config,
+    config_path: &Path,
+    dir: &Path,
+    interrupt: Receiver<()>,
+    mut progress: impl FnMut(u64),
+) -> anyhow::Result<ProcessOutcome> {
+    let run_id = new_run_id();
+    let run = RunServices::new(&run_id);
+    cleanup::claim(&run_id).context("cannot create the run's iceoryx2 directory")?;
+    let result = supervise(cfg, config_path, dir, &run, interrupt, &mut progress);
+    let removed = cleanup::remove_run(&run_id);
+    tracing::debug!(run_id, removed, "run resources removed");
+    result
+}
+
+fn supervise(
+    cfg: &Config,
+    config_path: &Path,
+    dir: &Path,
+    run: &RunServices,
+    interrupt: Receiver<()>,
+    progress: &mut impl FnMut(u64),
+) -> anyhow::Result<ProcessOutcome> {
+    let world_bin = sibling_binary("swarm-world")?;
+    let agent_bin = sibling_binary("swarm-agent")?;
+    let n = cfg.robots.count;
+    let mut outcome = ProcessOutcome::default();
+    let (tx, rx) = crossbeam_channel::unbounded::<Msg>();
+
+    {
+        let tx = tx.clone();
+        std::thread::spawn(move || {
+            if interrupt.recv().is_ok() {
+                let _ = tx.send(Msg::Interrupt);
+            }
+        });
+    }
+
+    let mut world = child_command(&world_bin)
+        .args(["--run-id", run.run_id(), "--config"])
+        .arg(config_path)
+        .arg("--out")
+        .arg(dir)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .with_context(|| format!("cannot start {}", world_bin.display()))?;
+    let world_pid = world.id() as i32;
+    let mut world_stdin = world.stdin.take();
+    let world_stdout = world.stdout.take().context("world stdout")?;
+    {
+        let tx = tx.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(world_stdout).lines() {
+                let Ok(line) = line else { break };
+                match serde_json::from_str::<Report>(&line) {
+                    Ok(r) => {
+                        if tx.send(Msg::Report(r)).is_err() {
+                            return;
+                        }
+                    }
+                    Err(_) => tracing::warn!("world said: {line}"),
+                }
+            }
+            let _ = tx.send(Msg::WorldEof);
+        });
+    }
+    spawn_reaper(tx.clone());
+
+    // Robots start once the world's services exist.
+    let mut world_alive = true;
+    let mut listening = false;
+    while !listening {
+        match rx.recv()? {
+            Msg::Report(Report::Listening) => listening = true,
+            Msg::Report(r) => tracing::debug!(?r, "early report"),
+            Msg::WorldEof => {}
+            Msg::Exited { pid, how } if pid == world_pid => {
+                bail!(
+                    "the world process failed before the run started ({how}); see its error above"
+                )
+            }
+            Msg::Exited { .. } => {}
+            Msg::Interrupt => {
+                signal_all(&[world_pid], libc::SIGTERM);
+                outcome.interrupted = true;
+                wait_for_exit(&rx, &[world_pid], &mut BTreeMap::new());
+                return Ok(outcome);
+            }
+        }
+    }
+    let mut robots: BTreeMap<i32, u32> = BTreeMap::new();
+    for id in 0..n {
+        let child = child_command(&agent_bin)
+            .args([
+                "--run-id",
+                run.run_id(),
+                "--robot",
+                &id.to_string(),
+                "--config",
+            ])
+            .arg(config_path)
+            .stdin(Stdio::null())
+            .spawn();
+        match child {
+            Ok(c) => {
+                robots.insert(c.id() as i32, id);
+            }
+            Err(e) => {
+                tracing::error!(robot = id, "cannot start robot: {e}");
+                outcome
+                    .unscheduled_deaths
+                    .insert(id, format!("failed to start: {e}"));
+                send_control(
+                    &mut world_stdin,
+                    &Control::RobotDied {
+                        robot: id,
+                        reason: "failed to start".to_string(),
+                    },
+                );
+            }
+        }
+    }
+
+    // Supervise until the world reports the end.
+    let mut done = false;
+    let mut interrupts = 0;
+    while !done {
+        match rx.recv()? {
+            Msg::Report(Report::Ready { startup_ms }) => outcome.startup_ms = Some(startup_ms),
+            Msg::Report(Report::Tick { tick }) => progress(tick),
+            Msg::Report(Report::Done {
+                interrupted,
+                metrics,
+            }) => {
+                outcome.interrupted |= interrupted;
+                outcome.world_metrics = Some(metrics);
+                done = true;
+            }
+            Msg::Report(Report::Listening) => {}
+            Msg::WorldEof => {}
+            Msg::Exited { pid, how } => {
+                if pid == world_pid {
+                    world_alive = false;
+                    outcome.world_failure = Some(format!("world process {how} before finishing"));
+                    done = true;
+                } else if let Some(id) = robots.remove(&pid) {
+                    // Code 0 is a robot that saw the world's shutdown sample before we saw
+                    // the world's Done report: a clean end, not a death.
+                    if how != CLEAN_EXIT {
+                        tracing::warn!(robot = id, "robot process {how}");
+                        outcome.unscheduled_deaths.insert(id, how.clone());
+                    }
+                    send_control(
+                        &mut world_stdin,
+                        &Control::RobotDied {
+                            robot: id,
+                            reason: format!("process {how}"),
+                        },
+                    );
+                }
+            }
+            Msg::Interrupt => {
+                interrupts += 1;
+                outcome.interrupted = true;
+                if interrupts == 1 {
+                    tracing::warn!("stopping the run (Ctrl-C again to kill it)");
+                    send_control(&mut world_stdin, &Control::Stop);
+                } else {
+                    let mut all: Vec<i32> = robots.keys().copied().collect();
+                    all.push(world_pid);
+                    signal_all(&all, libc::SIGKILL);
+                }
+            }
+        }
+    }
+    drop(world_stdin);
+
+    // The world told robots to exit (or died); give everyone a grace period, then SIGKILL.
+    let mut remaining: Vec<i32> = robots.keys().copied().collect();
+    if world_alive {
+        remaining.push(world_pid);
+    } else {
+        signal_all(&remaining, libc::SIGTERM);
+    }
+    wait_for_exit(&rx, &remaining, &mut robots);
+    Ok(outcome)
+}
+
+/// Waits until every pid in `pids` has been reaped; SIGKILLs stragglers after the grace.
+fn wait_for_exit(rx: &Receiver<Msg>, pids: &[i32], robots: &mut BTreeMap<i32, u32>) {
+    let mut left: std::collections::BTreeSet<i32> = pids.iter().copied().collect();
+    let deadline = Instant::now() + EXIT_GRACE;
+    let mut killed = false;
+    while !left.is_empty() {
+        let wait = deadline.saturating_duration_since(Instant::now());
+        match rx.recv_timeout(if killed { EXIT_GRACE } else { wait }) {
+            Ok(Msg::Exited { pid, .. }) => {
+                left.remove(&pid);
+                robots.remove(&pid);
+            }
+            Ok(_) => {}
+            Err(crossbeam_channel::RecvTimeoutError::Timeout) if !killed => {
+                tracing::warn!(
+                    count = left.len(),
+                    "processes did not exit in time; killing them"
+                );
+                signal_all(&left.iter().copied().collect::<Vec<_>>(), libc::SIGKILL);
+                killed = true;
+            }
+            Err(_) => {
+                tracing::error!(count = left.len(), "processes could not be reaped");
+                return;
+            }
+        }
+    }
+}

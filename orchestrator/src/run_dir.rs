@@ -1,0 +1,119 @@
+//! The run directory (DESIGN section 7): naming, `config.toml`, `metrics.json` and the plots
+//! drawn from `trajectory.csv`.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use swarmrt_protocol::RobotState;
+use swarmrt_protocol::config::Config;
+
+use crate::plot::{RobotTrack, write_trajectory_plots};
+
+/// `runs/<scenario>-s<seed>-<time>/`, with a numeric suffix if that exists already.
+pub fn default_dir(cfg: &Config) -> PathBuf {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0);
+    let (h, m, s) = ((secs / 3600) % 24, (secs / 60) % 60, secs % 60);
+    let days = secs / 86_400;
+    let (y, mo, d) = civil_from_days(days as i64);
+    let base = format!(
+        "runs/{}-s{}-{y:04}{mo:02}{d:02}-{h:02}{m:02}{s:02}",
+        cfg.scenario.name, cfg.scenario.seed
+    );
+    let mut dir = PathBuf::from(&base);
+    let mut k = 1;
+    while dir.exists() {
+        dir = PathBuf::from(format!("{base}-{k}"));
+        k += 1;
+    }
+    dir
+}
+
+/// Days since 1970-01-01 to (year, month, day), proleptic Gregorian (H. Hinnant's algorithm).
+fn civil_from_days(z: i64) -> (i64, u32, u32) {
+    let z = z + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    (yoe + era * 400 + (m <= 2) as i64, m, d)
+}
+
+/// Creates the directory and writes the resolved config (seed included).
+pub fn prepare(dir: &Path, cfg: &Config) -> anyhow::Result<PathBuf> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let config_path = dir.join("config.toml");
+    std::fs::write(&config_path, cfg.to_toml())
+        .with_context(|| format!("cannot write {}", config_path.display()))?;
+    Ok(config_path)
+}
+
+/// Writes `metrics.json` atomically (temp file + rename): never a truncated file.
+pub fn write_metrics(dir: &Path, metrics: &serde_json::Value) -> anyhow::Result<()> {
+    let tmp = dir.join("metrics.json.tmp");
+    std::fs::write(&tmp, serde_json::to_string_pretty(metrics)? + "\n")?;
+    std::fs::rename(&tmp, dir.join("metrics.json"))?;
+    Ok(())
+}
+
+/// Reads `trajectory.csv` back into one track per robot.
+pub fn read_tracks(dir: &Path) -> anyhow::Result<Vec<RobotTrack>> {
+    let text = std::fs::read_to_string(dir.join("trajectory.csv"))?;
+    let mut tracks: BTreeMap<u32, RobotTrack> = BTreeMap::new();
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != 9 {
+            continue;
+        }
+        let (Ok(id), Ok(x), Ok(y)) = (
+            f[1].parse::<u32>(),
+            f[2].parse::<f64>(),
+            f[3].parse::<f64>(),
+        ) else {
+            continue;
+        };
+        let state = match f[8] {
+            "down" => RobotState::Down,
+            "dead" => RobotState::Dead,
+            _ => RobotState::Active,
+        };
+        let t = tracks.entry(id).or_insert_with(|| RobotTrack {
+            id,
+            points: Vec::new(),
+            final_state: state,
+        });
+        if t.points.last() != Some(&(x, y)) {
+            t.points.push((x, y));
+        }
+        t.final_state = state;
+    }
+    Ok(tracks.into_values().collect())
+}
+
+/// Draws `trajectory.svg` and `trajectory.png` from the recorded trajectory.
+pub fn write_plots(dir: &Path, cfg: &Config) -> anyhow::Result<()> {
+    let tracks = read_tracks(dir)?;
+    write_trajectory_plots(
+        cfg,
+        &tracks,
+        &dir.join("trajectory.svg"),
+        &dir.join("trajectory.png"),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn civil_dates() {
+        assert_eq!(civil_from_days(0), (1970, 1, 1));
+        assert_eq!(civil_from_days(20_779), (2026, 11, 22));
+    }
+}

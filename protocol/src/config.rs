@@ -1,0 +1,856 @@
+//! The scenario config (DESIGN section 8): TOML, SI units, unknown keys refused.
+//!
+//! Loading is three steps so every error can name the file, the key and what was expected:
+//! parse the TOML into a table, apply `--set key=value` overrides to that table, then
+//! deserialize (with the failing key path) and [`Config::validate`] the bounds.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::Path;
+
+use crate::messages::{MAX_LIDAR_RAYS, MAX_OUTBOX};
+
+/// A user error in a config: which file, which key, what was expected.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConfigError {
+    /// The file (or `<--set>` for an override).
+    pub file: String,
+    /// Dotted key path, empty when the whole file is at fault.
+    pub key: String,
+    /// What was expected and what was found.
+    pub message: String,
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.key.is_empty() {
+            write!(f, "{}: {}", self.file, self.message)
+        } else {
+            write!(f, "{}: key `{}`: {}", self.file, self.key, self.message)
+        }
+    }
+}
+
+impl std::error::Error for ConfigError {}
+
+/// A whole scenario.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    /// Name, length, time step and seed.
+    pub scenario: Scenario,
+    /// Bounds, goal and obstacles.
+    pub map: MapConfig,
+    /// Robot body, limits, start layout and sensors.
+    pub robots: RobotsConfig,
+    /// The radio medium.
+    #[serde(default)]
+    pub radio: RadioConfig,
+    /// Which behaviour every robot runs.
+    #[serde(default)]
+    pub behaviour: BehaviourConfig,
+}
+
+/// `[scenario]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Scenario name, used in the run directory name.
+    pub name: String,
+    /// The run seed: every random draw derives from it.
+    #[serde(default)]
+    pub seed: u64,
+    /// Number of ticks to run at most.
+    pub ticks: u64,
+    /// Seconds per tick.
+    #[serde(default = "default_dt")]
+    pub dt: f64,
+    /// End the run early once every robot has reached the goal or is down or dead.
+    #[serde(default = "yes")]
+    pub stop_when_done: bool,
+    /// A robot that has not answered within this many milliseconds is logged as late.
+    #[serde(default = "default_deadline_ms")]
+    pub deadline_ms: u64,
+}
+
+/// `[map]`: the arena. Its bounds are walls.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapConfig {
+    /// `[min_x, min_y, max_x, max_y]` in metres.
+    pub bounds: [f64; 4],
+    /// The target area.
+    pub goal: Goal,
+    /// Circular obstacles.
+    #[serde(default)]
+    pub circles: Vec<CircleObstacle>,
+    /// Axis-aligned rectangular obstacles.
+    #[serde(default)]
+    pub rectangles: Vec<RectObstacle>,
+    /// Convex polygon obstacles (points counter-clockwise or clockwise).
+    #[serde(default)]
+    pub polygons: Vec<PolygonObstacle>,
+}
+
+/// The goal: a disc robots try to reach.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Goal {
+    /// Centre x in metres.
+    pub x: f64,
+    /// Centre y in metres.
+    pub y: f64,
+    /// A robot whose centre is within this radius has reached the goal.
+    pub radius: f64,
+}
+
+/// A circle obstacle.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CircleObstacle {
+    /// Centre x.
+    pub x: f64,
+    /// Centre y.
+    pub y: f64,
+    /// Radius.
+    pub r: f64,
+}
+
+/// An axis-aligned rectangle obstacle.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RectObstacle {
+    /// Left edge.
+    pub x_min: f64,
+    /// Bottom edge.
+    pub y_min: f64,
+    /// Right edge.
+    pub x_max: f64,
+    /// Top edge.
+    pub y_max: f64,
+}
+
+/// A convex polygon obstacle.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PolygonObstacle {
+    /// Vertices `[x, y]`, at least three.
+    pub points: Vec<[f64; 2]>,
+}
+
+/// `[robots]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotsConfig {
+    /// Number of robots (one process each).
+    pub count: u32,
+    /// Body radius in metres.
+    #[serde(default = "default_radius")]
+    pub radius: f64,
+    /// Forward speed limit in m/s.
+    #[serde(default = "default_max_speed")]
+    pub max_speed: f64,
+    /// Turn-rate limit in rad/s.
+    #[serde(default = "default_max_turn_rate")]
+    pub max_turn_rate: f64,
+    /// Where robots start.
+    #[serde(default)]
+    pub start: StartLayout,
+    /// The lidar.
+    #[serde(default)]
+    pub lidar: LidarConfig,
+    /// The range-and-bearing sensor.
+    #[serde(default)]
+    pub range_bearing: RangeBearingConfig,
+    /// The goal sensor (camera cone).
+    #[serde(default)]
+    pub goal_sensor: GoalSensorConfig,
+    /// Sensor noise.
+    #[serde(default)]
+    pub noise: NoiseConfig,
+}
+
+/// Start layout: derived from the count, so changing `robots.count` alone stays valid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartLayout {
+    /// Centre of the grid of start positions, x.
+    pub x: f64,
+    /// Centre of the grid, y.
+    pub y: f64,
+    /// Distance between neighbouring start positions.
+    pub spacing: f64,
+    /// Initial heading of every robot, degrees.
+    #[serde(default)]
+    pub heading_deg: f64,
+}
+
+impl Default for StartLayout {
+    fn default() -> Self {
+        StartLayout {
+            x: 2.0,
+            y: 2.0,
+            spacing: 0.8,
+            heading_deg: 0.0,
+        }
+    }
+}
+
+/// The lidar: `rays` beams evenly over `fov_deg`, centred on the heading.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LidarConfig {
+    /// Number of rays (1..=64).
+    #[serde(default = "default_rays")]
+    pub rays: u32,
+    /// Field of view in degrees (0..=360).
+    #[serde(default = "default_fov")]
+    pub fov_deg: f64,
+    /// Maximum range in metres.
+    #[serde(default = "default_lidar_range")]
+    pub range: f64,
+}
+
+impl Default for LidarConfig {
+    fn default() -> Self {
+        LidarConfig {
+            rays: default_rays(),
+            fov_deg: default_fov(),
+            range: default_lidar_range(),
+        }
+    }
+}
+
+impl LidarConfig {
+    /// Angle of ray `k` relative to the heading: evenly over the field of view, ray 0 at
+    /// `-fov/2`; a full circle does not repeat its first ray at the end.
+    pub fn ray_angle(&self, k: usize) -> f64 {
+        let rays = self.rays.max(1) as usize;
+        if rays == 1 {
+            return 0.0;
+        }
+        let fov = self.fov_deg.to_radians();
+        let step = if self.fov_deg >= 360.0 {
+            fov / rays as f64
+        } else {
+            fov / (rays - 1) as f64
+        };
+        -fov / 2.0 + step * k as f64
+    }
+}
+
+/// The e-puck style range-and-bearing sensor.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RangeBearingConfig {
+    /// Neighbours within this distance are reported.
+    #[serde(default = "default_rb_range")]
+    pub range: f64,
+}
+
+impl Default for RangeBearingConfig {
+    fn default() -> Self {
+        RangeBearingConfig {
+            range: default_rb_range(),
+        }
+    }
+}
+
+/// The goal sensor: sees the goal inside a cone and a range.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GoalSensorConfig {
+    /// Maximum distance in metres.
+    #[serde(default = "default_goal_range")]
+    pub range: f64,
+    /// Cone width in degrees, centred on the heading.
+    #[serde(default = "default_goal_fov")]
+    pub fov_deg: f64,
+}
+
+impl Default for GoalSensorConfig {
+    fn default() -> Self {
+        GoalSensorConfig {
+            range: default_goal_range(),
+            fov_deg: default_goal_fov(),
+        }
+    }
+}
+
+/// Gaussian sensor noise (standard deviations); zero means exact.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NoiseConfig {
+    /// Position noise in metres.
+    #[serde(default)]
+    pub pose: f64,
+    /// Heading noise in radians.
+    #[serde(default)]
+    pub heading: f64,
+    /// Lidar range noise in metres.
+    #[serde(default)]
+    pub lidar: f64,
+}
+
+/// How frames are lost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LossModel {
+    /// Each copy is lost independently with probability `radio.loss`.
+    #[default]
+    Bernoulli,
+    /// Two-state bursty loss per link, as netem's `loss gemodel p r 1-h 1-k`.
+    GilbertElliott,
+}
+
+/// `[radio]` (DESIGN section 4).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RadioConfig {
+    /// Frames reach robots within this distance (metres).
+    #[serde(default = "default_radio_range")]
+    pub range: f64,
+    /// Bernoulli drop probability per copy.
+    #[serde(default)]
+    pub loss: f64,
+    /// Which loss model applies.
+    #[serde(default)]
+    pub loss_model: LossModel,
+    /// Gilbert-Elliott: probability Good -> Bad per copy on a link.
+    #[serde(default = "default_ge_p")]
+    pub ge_p: f64,
+    /// Gilbert-Elliott: probability Bad -> Good per copy on a link (mean burst = 1/r).
+    #[serde(default = "default_ge_r")]
+    pub ge_r: f64,
+    /// Gilbert-Elliott: loss probability in the Good state (netem's 1-k).
+    #[serde(default)]
+    pub ge_loss_good: f64,
+    /// Gilbert-Elliott: loss probability in the Bad state (netem's 1-h).
+    #[serde(default = "one")]
+    pub ge_loss_bad: f64,
+    /// Extra ticks between sending and delivery (0 = delivered with the next observation).
+    #[serde(default)]
+    pub delay_ticks: u32,
+    /// Uniform extra delay in 0..=jitter_ticks per copy (this is what reorders frames).
+    #[serde(default)]
+    pub jitter_ticks: u32,
+    /// Most frames one robot may send per tick; more are dropped as `capacity`.
+    #[serde(default = "default_capacity")]
+    pub capacity: u32,
+    /// When true, obstacles between sender and receiver block a frame.
+    #[serde(default)]
+    pub line_of_sight: bool,
+}
+
+impl Default for RadioConfig {
+    fn default() -> Self {
+        RadioConfig {
+            range: default_radio_range(),
+            loss: 0.0,
+            loss_model: LossModel::Bernoulli,
+            ge_p: default_ge_p(),
+            ge_r: default_ge_r(),
+            ge_loss_good: 0.0,
+            ge_loss_bad: 1.0,
+            delay_ticks: 0,
+            jitter_ticks: 0,
+            capacity: default_capacity(),
+            line_of_sight: false,
+        }
+    }
+}
+
+/// `[behaviour]`: which behaviour every robot runs, tagged by `kind`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum BehaviourConfig {
+    /// Go to the goal with reactive lidar avoidance and periodic pose beacons.
+    Goto(GotoConfig),
+}
+
+impl Default for BehaviourConfig {
+    fn default() -> Self {
+        BehaviourConfig::Goto(GotoConfig::default())
+    }
+}
+
+/// Parameters of the go-to-goal behaviour.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GotoConfig {
+    /// Cruise speed in m/s.
+    #[serde(default = "default_cruise")]
+    pub speed: f64,
+    /// Obstacles closer than this (metres, from the robot centre) make the robot turn away.
+    #[serde(default = "default_avoid")]
+    pub avoid_distance: f64,
+    /// Ticks between pose beacons (0 = no beacons).
+    #[serde(default = "default_beacon_period")]
+    pub beacon_period: u32,
+    /// Distance between the goal slots robots spread into around the goal centre.
+    #[serde(default = "default_slot_spacing")]
+    pub slot_spacing: f64,
+}
+
+impl Default for GotoConfig {
+    fn default() -> Self {
+        GotoConfig {
+            speed: default_cruise(),
+            avoid_distance: default_avoid(),
+            beacon_period: default_beacon_period(),
+            slot_spacing: default_slot_spacing(),
+        }
+    }
+}
+
+fn default_dt() -> f64 {
+    0.1
+}
+fn yes() -> bool {
+    true
+}
+fn one() -> f64 {
+    1.0
+}
+fn default_deadline_ms() -> u64 {
+    2000
+}
+fn default_radius() -> f64 {
+    0.15
+}
+fn default_max_speed() -> f64 {
+    1.0
+}
+fn default_max_turn_rate() -> f64 {
+    3.0
+}
+fn default_rays() -> u32 {
+    16
+}
+fn default_fov() -> f64 {
+    180.0
+}
+fn default_lidar_range() -> f64 {
+    3.0
+}
+fn default_rb_range() -> f64 {
+    3.0
+}
+fn default_goal_range() -> f64 {
+    1000.0
+}
+fn default_goal_fov() -> f64 {
+    360.0
+}
+fn default_radio_range() -> f64 {
+    10.0
+}
+fn default_ge_p() -> f64 {
+    0.05
+}
+fn default_ge_r() -> f64 {
+    0.25
+}
+fn default_capacity() -> u32 {
+    4
+}
+fn default_cruise() -> f64 {
+    0.5
+}
+fn default_avoid() -> f64 {
+    0.9
+}
+fn default_beacon_period() -> u32 {
+    5
+}
+fn default_slot_spacing() -> f64 {
+    0.6
+}
+
+/// Upper bound on robots in one run (process mode is limited by the machine long before).
+pub const MAX_ROBOTS: u32 = 100_000;
+
+impl Config {
+    /// Reads `path`, applies `overrides` (`key=value`) and validates.
+    pub fn load(path: &Path, overrides: &[String]) -> Result<Config, ConfigError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
+            file: file.clone(),
+            key: String::new(),
+            message: format!("cannot read: {e}"),
+        })?;
+        Self::from_toml_str(&file, &text, overrides)
+    }
+
+    /// Parses `text` (named `file` in errors), applies `overrides` and validates.
+    pub fn from_toml_str(
+        file: &str,
+        text: &str,
+        overrides: &[String],
+    ) -> Result<Config, ConfigError> {
+        let mut table: toml::Table = toml::from_str(text).map_err(|e| ConfigError {
+            file: file.to_string(),
+            key: String::new(),
+            message: format!("not valid TOML: {}", one_line(&e.to_string())),
+        })?;
+        for ov in overrides {
+            apply_override(&mut table, ov).map_err(|(key, message)| ConfigError {
+                file: "--set".to_string(),
+                key,
+                message,
+            })?;
+        }
+        let config: Config =
+            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+                ConfigError {
+                    file: file.to_string(),
+                    key: e.path().to_string().trim_start_matches('.').to_string(),
+                    message: one_line(&e.inner().to_string()),
+                }
+            })?;
+        config.validate().map_err(|(key, message)| ConfigError {
+            file: file.to_string(),
+            key,
+            message,
+        })?;
+        Ok(config)
+    }
+
+    /// The resolved config as TOML: running it again reproduces the run.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a Config always serializes")
+    }
+
+    /// Checks every value against its bounds; the error names the key and the bounds.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let s = &self.scenario;
+        check(!s.name.is_empty(), "scenario.name", "a non-empty name")?;
+        check(
+            s.name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
+            "scenario.name",
+            "letters, digits, '_' or '-' only (it becomes a directory name)",
+        )?;
+        range_u64("scenario.ticks", s.ticks, 1, 100_000_000)?;
+        range_f("scenario.dt", s.dt, 1e-4, 10.0)?;
+        range_u64("scenario.deadline_ms", s.deadline_ms, 1, 3_600_000)?;
+
+        let m = &self.map;
+        for (i, v) in m.bounds.iter().enumerate() {
+            finite(&format!("map.bounds[{i}]"), *v)?;
+        }
+        check(
+            m.bounds[2] > m.bounds[0] && m.bounds[3] > m.bounds[1],
+            "map.bounds",
+            "[min_x, min_y, max_x, max_y] with max > min",
+        )?;
+        finite("map.goal.x", m.goal.x)?;
+        finite("map.goal.y", m.goal.y)?;
+        range_f("map.goal.radius", m.goal.radius, 1e-3, 1e6)?;
+        check(
+            self.inside_bounds(m.goal.x, m.goal.y, 0.0),
+            "map.goal",
+            "a goal inside map.bounds",
+        )?;
+        for (i, c) in m.circles.iter().enumerate() {
+            finite(&format!("map.circles[{i}].x"), c.x)?;
+            finite(&format!("map.circles[{i}].y"), c.y)?;
+            range_f(&format!("map.circles[{i}].r"), c.r, 1e-3, 1e6)?;
+        }
+        for (i, r) in m.rectangles.iter().enumerate() {
+            for (k, v) in [
+                ("x_min", r.x_min),
+                ("y_min", r.y_min),
+                ("x_max", r.x_max),
+                ("y_max", r.y_max),
+            ] {
+                finite(&format!("map.rectangles[{i}].{k}"), v)?;
+            }
+            check(
+                r.x_max > r.x_min && r.y_max > r.y_min,
+                &format!("map.rectangles[{i}]"),
+                "x_max > x_min and y_max > y_min",
+            )?;
+        }
+        for (i, p) in m.polygons.iter().enumerate() {
+            check(
+                p.points.len() >= 3,
+                &format!("map.polygons[{i}].points"),
+                "at least 3 points",
+            )?;
+            for (j, pt) in p.points.iter().enumerate() {
+                finite(&format!("map.polygons[{i}].points[{j}]"), pt[0])?;
+                finite(&format!("map.polygons[{i}].points[{j}]"), pt[1])?;
+            }
+        }
+
+        let r = &self.robots;
+        range_u64("robots.count", r.count as u64, 1, MAX_ROBOTS as u64)?;
+        range_f("robots.radius", r.radius, 1e-3, 100.0)?;
+        range_f("robots.max_speed", r.max_speed, 0.0, 1000.0)?;
+        range_f("robots.max_turn_rate", r.max_turn_rate, 0.0, 1000.0)?;
+        finite("robots.start.x", r.start.x)?;
+        finite("robots.start.y", r.start.y)?;
+        range_f("robots.start.spacing", r.start.spacing, 2.0 * r.radius + 1e-6, 1e6)
+            .map_err(|(k, _)| {
+                (
+                    k,
+                    format!(
+                        "a value above 2 * robots.radius = {} so robots do not start overlapping, got {}",
+                        2.0 * r.radius,
+                        r.start.spacing
+                    ),
+                )
+            })?;
+        finite("robots.start.heading_deg", r.start.heading_deg)?;
+        range_u64(
+            "robots.lidar.rays",
+            r.lidar.rays as u64,
+            1,
+            MAX_LIDAR_RAYS as u64,
+        )?;
+        range_f("robots.lidar.fov_deg", r.lidar.fov_deg, 0.0, 360.0)?;
+        range_f("robots.lidar.range", r.lidar.range, 1e-3, 1e6)?;
+        range_f(
+            "robots.range_bearing.range",
+            r.range_bearing.range,
+            0.0,
+            1e6,
+        )?;
+        range_f("robots.goal_sensor.range", r.goal_sensor.range, 0.0, 1e9)?;
+        range_f(
+            "robots.goal_sensor.fov_deg",
+            r.goal_sensor.fov_deg,
+            0.0,
+            360.0,
+        )?;
+        range_f("robots.noise.pose", r.noise.pose, 0.0, 100.0)?;
+        range_f("robots.noise.heading", r.noise.heading, 0.0, 10.0)?;
+        range_f("robots.noise.lidar", r.noise.lidar, 0.0, 100.0)?;
+
+        let q = &self.radio;
+        range_f("radio.range", q.range, 0.0, 1e9)?;
+        range_f("radio.loss", q.loss, 0.0, 1.0)?;
+        range_f("radio.ge_p", q.ge_p, 0.0, 1.0)?;
+        range_f("radio.ge_r", q.ge_r, 0.0, 1.0)?;
+        range_f("radio.ge_loss_good", q.ge_loss_good, 0.0, 1.0)?;
+        range_f("radio.ge_loss_bad", q.ge_loss_bad, 0.0, 1.0)?;
+        range_u64("radio.delay_ticks", q.delay_ticks as u64, 0, 10_000)?;
+        range_u64("radio.jitter_ticks", q.jitter_ticks as u64, 0, 10_000)?;
+        range_u64("radio.capacity", q.capacity as u64, 1, MAX_OUTBOX as u64)?;
+
+        match &self.behaviour {
+            BehaviourConfig::Goto(g) => {
+                range_f("behaviour.speed", g.speed, 0.0, 1000.0)?;
+                range_f("behaviour.avoid_distance", g.avoid_distance, 0.0, 1e6)?;
+                range_u64(
+                    "behaviour.beacon_period",
+                    g.beacon_period as u64,
+                    0,
+                    1_000_000,
+                )?;
+                range_f("behaviour.slot_spacing", g.slot_spacing, 0.0, 1e6)?;
+            }
+        }
+
+        for (i, (x, y)) in self.start_positions().iter().enumerate() {
+            check(
+                self.inside_bounds(*x, *y, r.radius),
+                "robots.start",
+                &format!(
+                    "every start position inside map.bounds; robot {i} would start at ({x:.2}, {y:.2}) with robots.count = {}",
+                    r.count
+                ),
+            )?;
+        }
+        Ok(())
+    }
+
+    fn inside_bounds(&self, x: f64, y: f64, margin: f64) -> bool {
+        let b = &self.map.bounds;
+        x - margin > b[0] && x + margin < b[2] && y - margin > b[1] && y + margin < b[3]
+    }
+
+    /// Start positions, a near-square grid centred on `robots.start`, row by row in id order.
+    pub fn start_positions(&self) -> Vec<(f64, f64)> {
+        grid_around(
+            self.robots.count as usize,
+            self.robots.start.x,
+            self.robots.start.y,
+            self.robots.start.spacing,
+        )
+    }
+
+    /// Initial heading of every robot, radians.
+    pub fn start_heading(&self) -> f64 {
+        self.robots.start.heading_deg.to_radians()
+    }
+}
+
+/// `n` points on a near-square grid of `spacing` centred on (`cx`, `cy`), in row order.
+pub fn grid_around(n: usize, cx: f64, cy: f64, spacing: f64) -> Vec<(f64, f64)> {
+    let cols = (n as f64).sqrt().ceil().max(1.0) as usize;
+    let rows = n.div_ceil(cols);
+    let x0 = cx - spacing * (cols as f64 - 1.0) / 2.0;
+    let y0 = cy - spacing * (rows as f64 - 1.0) / 2.0;
+    (0..n)
+        .map(|i| {
+            (
+                x0 + spacing * (i % cols) as f64,
+                y0 + spacing * (i / cols) as f64,
+            )
+        })
+        .collect()
+}
+
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+fn check(ok: bool, key: &str, expected: &str) -> Result<(), (String, String)> {
+    if ok {
+        Ok(())
+    } else {
+        Err((key.to_string(), format!("expected {expected}")))
+    }
+}
+
+fn finite(key: &str, v: f64) -> Result<(), (String, String)> {
+    check(v.is_finite(), key, &format!("a finite number, got {v}"))
+}
+
+fn range_f(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), (String, String)> {
+    check(
+        v.is_finite() && v >= lo && v <= hi,
+        key,
+        &format!("a number in [{lo}, {hi}], got {v}"),
+    )
+}
+
+fn range_u64(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), (String, String)> {
+    check(
+        v >= lo && v <= hi,
+        key,
+        &format!("an integer in [{lo}, {hi}], got {v}"),
+    )
+}
+
+/// Applies one `key=value` override; the value is read as TOML (`0.2`, `true`, `"x"`, `[1, 2]`)
+/// and, failing that, as a bare string.
+fn apply_override(table: &mut toml::Table, ov: &str) -> Result<(), (String, String)> {
+    let (key, raw) = ov.split_once('=').ok_or_else(|| {
+        (
+            ov.to_string(),
+            "expected key=value, e.g. radio.loss=0.2".to_string(),
+        )
+    })?;
+    let key = key.trim();
+    let parts: Vec<&str> = key.split('.').collect();
+    if key.is_empty() || parts.iter().any(|p| p.is_empty()) {
+        return Err((
+            key.to_string(),
+            "expected a dotted key like radio.loss".to_string(),
+        ));
+    }
+    let value = match toml::from_str::<toml::Table>(&format!("v = {}", raw.trim())) {
+        Ok(mut t) => t.remove("v").expect("parsed key v"),
+        Err(_) => toml::Value::String(raw.trim().to_string()),
+    };
+    let mut cur = table;
+    for part in &parts[..parts.len() - 1] {
+        let entry = cur
+            .entry(part.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        cur = entry.as_table_mut().ok_or_else(|| {
+            (
+                key.to_string(),
+                format!("`{part}` is not a table, so it has no sub-keys"),
+            )
+        })?;
+    }
+    cur.insert(parts[parts.len() - 1].to_string(), value);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+[scenario]
+name = "t"
+ticks = 10
+[map]
+bounds = [0.0, 0.0, 10.0, 10.0]
+goal = { x = 8.0, y = 8.0, radius = 1.0 }
+[robots]
+count = 4
+"#;
+
+    fn load(text: &str, ov: &[&str]) -> Result<Config, ConfigError> {
+        let ov: Vec<String> = ov.iter().map(|s| s.to_string()).collect();
+        Config::from_toml_str("t.toml", text, &ov)
+    }
+
+    #[test]
+    fn minimal_config_gets_defaults() {
+        let c = load(MINIMAL, &[]).unwrap();
+        assert_eq!(c.scenario.dt, 0.1);
+        assert_eq!(c.radio.capacity, 4);
+        assert_eq!(c.start_positions().len(), 4);
+        assert!(matches!(c.behaviour, BehaviourConfig::Goto(_)));
+    }
+
+    #[test]
+    fn overrides_reach_nested_keys_and_round_trip() {
+        let c = load(
+            MINIMAL,
+            &["radio.loss=0.3", "robots.count=9", "scenario.seed=7"],
+        )
+        .unwrap();
+        assert_eq!(c.radio.loss, 0.3);
+        assert_eq!(c.robots.count, 9);
+        let again = load(&c.to_toml(), &[]).unwrap();
+        assert_eq!(again, c);
+    }
+
+    #[test]
+    fn unknown_key_names_file_and_key() {
+        let e = load(MINIMAL, &["radio.los=0.3"]).unwrap_err();
+        assert_eq!(e.file, "t.toml");
+        assert_eq!(e.key, "radio.los");
+        assert!(e.message.contains("unknown field `los`"), "{e}");
+    }
+
+    #[test]
+    fn wrong_type_names_key() {
+        let e = load(MINIMAL, &["robots.count=\"many\""]).unwrap_err();
+        assert_eq!(e.key, "robots.count", "{e}");
+    }
+
+    #[test]
+    fn negative_count_is_refused() {
+        let e = load(MINIMAL, &["robots.count=-3"]).unwrap_err();
+        assert_eq!(e.key, "robots.count", "{e}");
+    }
+
+    #[test]
+    fn loss_above_one_is_refused_with_bounds() {
+        let e = load(MINIMAL, &["radio.loss=1.5"]).unwrap_err();
+        assert_eq!(e.key, "radio.loss");
+        assert!(e.message.contains("[0, 1]"), "{e}");
+    }
+
+    #[test]
+    fn too_many_robots_for_the_map_is_refused() {
+        let e = load(MINIMAL, &["robots.count=400"]).unwrap_err();
+        assert_eq!(e.key, "robots.start", "{e}");
+    }
+
+    #[test]
+    fn grid_is_centred() {
+        let g = grid_around(4, 0.0, 0.0, 1.0);
+        assert_eq!(g, vec![(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)]);
+    }
+}

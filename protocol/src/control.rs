@@ -1,0 +1,63 @@
+//! The orchestrator and the world talk over the world's stdin and stdout, one JSON object a
+//! line. Pipes need no shared memory, survive either side dying (EOF), and keep the
+//! orchestrator free of iceoryx2 ports.
+
+use serde::{Deserialize, Serialize};
+
+/// Orchestrator -> world (stdin).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "control", rename_all = "snake_case")]
+pub enum Control {
+    /// A robot process is gone (reaped by the orchestrator): mark it dead, stop waiting for it.
+    RobotDied {
+        /// The robot.
+        robot: u32,
+        /// How it ended, e.g. "killed by signal 9".
+        reason: String,
+    },
+    /// End the run now and write the records (Ctrl-C or a failed child).
+    Stop,
+}
+
+/// World -> orchestrator (stdout).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "report", rename_all = "snake_case")]
+pub enum Report {
+    /// The services exist: robots can be started now.
+    Listening,
+    /// Every robot said hello (or died): tick 0 is about to be published.
+    Ready {
+        /// Milliseconds from `Listening` until the last hello.
+        startup_ms: u64,
+    },
+    /// Progress, sent at most a few times a second.
+    Tick {
+        /// The tick just completed.
+        tick: u64,
+    },
+    /// The run is over and the records are complete.
+    Done {
+        /// True when it ended early on request or on a termination signal.
+        interrupted: bool,
+        /// The world's metrics (JSON object).
+        metrics: serde_json::Value,
+    },
+}
+
+impl Report {
+    /// One line, newline-terminated.
+    pub fn to_line(&self) -> String {
+        let mut s = serde_json::to_string(self).expect("reports always serialize");
+        s.push('\n');
+        s
+    }
+}
+
+impl Control {
+    /// One line, newline-terminated.
+    pub fn to_line(&self) -> String {
+        let mut s = serde_json::to_string(self).expect("controls always serialize");
+        s.push('\n');
+        s
+    }
+}

@@ -1,0 +1,175 @@
+//! How the processes of a run meet over iceoryx2: the per-run iceoryx2 config and the two
+//! service pairs of DESIGN section 2, created by the world and opened by robots.
+//!
+//! Topology (flat in N, see DESIGN section 9): one observation service whose samples hold
+//! every robot's slot, one command service all robots publish on, and an event service beside
+//! each to wake the other side. Both pub/sub services keep iceoryx2's safe overflow on: in
+//! lock-step no queue ever holds more than one sample per publisher, so overflow cannot drop
+//! anything, and a publisher never blocks on a subscriber that was SIGKILLed.
+
+use iceoryx2::prelude::*;
+use iceoryx2_bb_system_types::file_name::FileName;
+use iceoryx2_bb_system_types::path::Path as IoxPath;
+
+use crate::messages::{Command, Observation, ObservationHeader};
+use crate::services::RunServices;
+
+/// Shortcut for the iceoryx2 service flavour every process uses.
+pub type Svc = ipc::Service;
+
+/// Error type of this module (iceoryx2 errors are many distinct types).
+pub type IpcError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Per-run iceoryx2 config: own root directory and shared-memory prefix (isolation and
+/// exact cleanup), and no dead-node scan on every node creation (it made 200 robots take ~10 s
+/// to start; the orchestrator cleans a run's resources itself).
+pub fn ipc_config(run: &RunServices) -> Result<Config, IpcError> {
+    let mut cfg = Config::default();
+    let root = format!("{}/", run.ipc_root().display());
+    cfg.global.set_root_path(
+        &IoxPath::new(root.as_bytes()).map_err(|e| format!("ipc root {root}: {e:?}"))?,
+    );
+    cfg.global.prefix =
+        FileName::new(run.shm_prefix().as_bytes()).map_err(|e| format!("ipc prefix: {e:?}"))?;
+    cfg.global.node.cleanup_dead_nodes_on_creation = false;
+    cfg.global.node.cleanup_dead_nodes_on_destruction = false;
+    cfg.global.service.cleanup_dead_nodes_on_open = false;
+    // Robots open services the world created moments before; allow a slow machine time.
+    cfg.global.creation_timeout = core::time::Duration::from_secs(10);
+    Ok(cfg)
+}
+
+/// Creates a node named `name` with the run's config.
+pub fn node(run: &RunServices, name: &str) -> Result<Node<Svc>, IpcError> {
+    let cfg = ipc_config(run)?;
+    let name = NodeName::new(name).map_err(|e| format!("node name {name}: {e:?}"))?;
+    Ok(NodeBuilder::new()
+        .name(&name)
+        .config(&cfg)
+        .create::<Svc>()?)
+}
+
+fn service_name(s: &str) -> Result<ServiceName, IpcError> {
+    Ok(ServiceName::new(s).map_err(|e| format!("service name {s}: {e:?}"))?)
+}
+
+/// The observation service handle.
+pub type ObservationService = iceoryx2::service::port_factory::publish_subscribe::PortFactory<
+    Svc,
+    [Observation],
+    ObservationHeader,
+>;
+/// The command service handle.
+pub type CommandService =
+    iceoryx2::service::port_factory::publish_subscribe::PortFactory<Svc, Command, ()>;
+/// An event service handle.
+pub type EventService = iceoryx2::service::port_factory::event::PortFactory<Svc>;
+
+/// Services of a run, as the world creates them (sized from the robot count).
+pub struct WorldServices {
+    /// World -> robots samples.
+    pub observations: ObservationService,
+    /// World -> robots wake-up.
+    pub observations_event: EventService,
+    /// Robots -> world samples.
+    pub commands: CommandService,
+    /// Robots (and the world's control thread) -> world wake-up.
+    pub commands_event: EventService,
+}
+
+/// Creates the run's services for `robots` robots. Extra ports leave room for the world's
+/// control thread and for restarted robots whose old port is not yet reclaimed.
+pub fn create_services(
+    node: &Node<Svc>,
+    run: &RunServices,
+    robots: usize,
+) -> Result<WorldServices, IpcError> {
+    let n = robots + 8;
+    let observations = node
+        .service_builder(&service_name(&run.observations())?)
+        .publish_subscribe::<[Observation]>()
+        .user_header::<ObservationHeader>()
+        .max_publishers(1)
+        .max_subscribers(n)
+        .max_nodes(n + 2)
+        .subscriber_max_buffer_size(2)
+        .subscriber_max_borrowed_samples(2)
+        .history_size(0)
+        .enable_safe_overflow(true)
+        .create()?;
+    let observations_event = node
+        .service_builder(&service_name(&run.observations())?)
+        .event()
+        .max_notifiers(2)
+        .max_listeners(n)
+        .max_nodes(n + 2)
+        .create()?;
+    let commands = node
+        .service_builder(&service_name(&run.commands())?)
+        .publish_subscribe::<Command>()
+        .max_publishers(n)
+        .max_subscribers(1)
+        .max_nodes(n + 2)
+        .subscriber_max_buffer_size(4)
+        .subscriber_max_borrowed_samples(4)
+        .history_size(0)
+        .enable_safe_overflow(true)
+        .create()?;
+    let commands_event = node
+        .service_builder(&service_name(&run.commands())?)
+        .event()
+        .max_notifiers(n + 2)
+        .max_listeners(2)
+        .max_nodes(n + 2)
+        .create()?;
+    Ok(WorldServices {
+        observations,
+        observations_event,
+        commands,
+        commands_event,
+    })
+}
+
+/// The services as a robot (or the world's control thread) opens them.
+pub struct RobotServices {
+    /// World -> robots samples.
+    pub observations: ObservationService,
+    /// World -> robots wake-up.
+    pub observations_event: EventService,
+    /// Robots -> world samples.
+    pub commands: CommandService,
+    /// Robots -> world wake-up.
+    pub commands_event: EventService,
+}
+
+/// Opens the services the world created.
+pub fn open_services(node: &Node<Svc>, run: &RunServices) -> Result<RobotServices, IpcError> {
+    Ok(RobotServices {
+        observations: node
+            .service_builder(&service_name(&run.observations())?)
+            .publish_subscribe::<[Observation]>()
+            .user_header::<ObservationHeader>()
+            .open()?,
+        observations_event: node
+            .service_builder(&service_name(&run.observations())?)
+            .event()
+            .open()?,
+        commands: node
+            .service_builder(&service_name(&run.commands())?)
+            .publish_subscribe::<Command>()
+            .open()?,
+        commands_event: node
+            .service_builder(&service_name(&run.commands())?)
+            .event()
+            .open()?,
+    })
+}
+
+/// Opens only the command event service (the world's control thread uses it to wake the
+/// world's main loop).
+pub fn open_commands_event(node: &Node<Svc>, run: &RunServices) -> Result<EventService, IpcError> {
+    Ok(node
+        .service_builder(&service_name(&run.commands())?)
+        .event()
+        .open()?)
+}

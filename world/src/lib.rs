@@ -1,0 +1,44 @@
+//! The world: owns the truth of a run (DESIGN sections 2-5).
+//!
+//! The core ([`World`]) is a deterministic state machine; the process shell (`shell`) only
+//! moves its observations and commands through iceoryx2.
+//!
+//! ```
+//! use swarmrt_protocol::{config::Config, Command, Observation};
+//! use swarmrt_world::World;
+//!
+//! let cfg = Config::from_toml_str("doc.toml", r#"
+//!     [scenario]
+//!     name = "doc"
+//!     ticks = 5
+//!     [map]
+//!     bounds = [0.0, 0.0, 10.0, 10.0]
+//!     goal = { x = 8.0, y = 8.0, radius = 1.0 }
+//!     [robots]
+//!     count = 2
+//! "#, &[]).unwrap();
+//! let mut world = World::new(&cfg).unwrap();
+//! let mut obs = vec![Observation::empty(0, 0); 2];
+//! while !world.finished() {
+//!     world.observe(&mut obs);
+//!     let cmds: Vec<_> = obs.iter().map(|o| {
+//!         let mut c = Command::act(o.robot, o.tick);
+//!         c.v = 0.5;
+//!         Some(c)
+//!     }).collect();
+//!     world.step(&cmds);
+//! }
+//! assert_eq!(world.tick(), 5);
+//! assert!(world.robots()[0].x > 1.6);
+//! ```
+#![warn(missing_docs)]
+
+pub mod grid;
+pub mod map;
+pub mod radio;
+pub mod records;
+pub mod rng;
+pub mod shell;
+pub mod world;
+
+pub use world::{Event, Robot, World, WorldMetrics};

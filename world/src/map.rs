@@ -1,0 +1,184 @@
+//! The static map: obstacles and walls built once into one parry2d [`Compound`] (its BVH is
+//! the acceleration structure every ray cast and contact query goes through).
+//!
+//! This is the only module that speaks parry2d/nalgebra types; the rest of the world uses
+//! plain `(f64, f64)` points.
+
+use nalgebra::{Isometry2, Point2, Vector2};
+use parry2d_f64::query::{PointQuery, Ray, RayCast};
+use parry2d_f64::shape::{Compound, ConvexPolygon, SharedShape};
+use swarmrt_protocol::config::MapConfig;
+
+/// Thickness of the walls placed just outside the map bounds.
+const WALL: f64 = 1.0;
+
+/// Obstacles and walls of one map.
+pub struct Map {
+    obstacles: Compound,
+}
+
+/// Why a map could not be built.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MapError {
+    /// Config key of the offending obstacle.
+    pub key: String,
+    /// What is wrong with it.
+    pub message: String,
+}
+
+impl Map {
+    /// Builds the compound once per run: bounds become four walls.
+    pub fn build(cfg: &MapConfig) -> Result<Map, MapError> {
+        let [x0, y0, x1, y1] = cfg.bounds;
+        let (w, h) = (x1 - x0, y1 - y0);
+        let mut shapes: Vec<(Isometry2<f64>, SharedShape)> = vec![
+            // left, right, bottom, top walls, each overlapping the corners
+            (
+                Isometry2::translation(x0 - WALL / 2.0, y0 + h / 2.0),
+                SharedShape::cuboid(WALL / 2.0, h / 2.0 + WALL),
+            ),
+            (
+                Isometry2::translation(x1 + WALL / 2.0, y0 + h / 2.0),
+                SharedShape::cuboid(WALL / 2.0, h / 2.0 + WALL),
+            ),
+            (
+                Isometry2::translation(x0 + w / 2.0, y0 - WALL / 2.0),
+                SharedShape::cuboid(w / 2.0 + WALL, WALL / 2.0),
+            ),
+            (
+                Isometry2::translation(x0 + w / 2.0, y1 + WALL / 2.0),
+                SharedShape::cuboid(w / 2.0 + WALL, WALL / 2.0),
+            ),
+        ];
+        for c in &cfg.circles {
+            shapes.push((Isometry2::translation(c.x, c.y), SharedShape::ball(c.r)));
+        }
+        for r in &cfg.rectangles {
+            shapes.push((
+                Isometry2::translation((r.x_min + r.x_max) / 2.0, (r.y_min + r.y_max) / 2.0),
+                SharedShape::cuboid((r.x_max - r.x_min) / 2.0, (r.y_max - r.y_min) / 2.0),
+            ));
+        }
+        for (i, p) in cfg.polygons.iter().enumerate() {
+            let points: Vec<Point2<f64>> =
+                p.points.iter().map(|q| Point2::new(q[0], q[1])).collect();
+            let poly = ConvexPolygon::from_convex_hull(&points).ok_or_else(|| MapError {
+                key: format!("map.polygons[{i}].points"),
+                message: "expected a polygon with non-zero area".to_string(),
+            })?;
+            shapes.push((Isometry2::identity(), SharedShape::new(poly)));
+        }
+        Ok(Map {
+            obstacles: Compound::new(shapes),
+        })
+    }
+
+    /// Distance from `p` to the nearest obstacle or wall (0 when inside one).
+    pub fn clearance(&self, p: (f64, f64)) -> f64 {
+        self.obstacles
+            .distance_to_point(&Isometry2::identity(), &Point2::new(p.0, p.1), true)
+    }
+
+    /// Distance along the ray from `origin` in direction `angle` to the first obstacle, if any
+    /// within `max_range`. A ray starting inside an obstacle hits at 0.
+    pub fn cast(&self, origin: (f64, f64), angle: f64, max_range: f64) -> Option<f64> {
+        let ray = Ray::new(
+            Point2::new(origin.0, origin.1),
+            Vector2::new(angle.cos(), angle.sin()),
+        );
+        self.obstacles
+            .cast_ray(&Isometry2::identity(), &ray, max_range, true)
+    }
+
+    /// True when an obstacle lies on the segment from `a` to `b`.
+    pub fn blocks(&self, a: (f64, f64), b: (f64, f64)) -> bool {
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        let d = (dx * dx + dy * dy).sqrt();
+        if d == 0.0 {
+            return false;
+        }
+        self.cast(a, dy.atan2(dx), d).is_some_and(|t| t < d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use swarmrt_protocol::config::{CircleObstacle, Goal, PolygonObstacle, RectObstacle};
+
+    fn map() -> Map {
+        Map::build(&MapConfig {
+            bounds: [0.0, 0.0, 10.0, 10.0],
+            goal: Goal {
+                x: 9.0,
+                y: 9.0,
+                radius: 0.5,
+            },
+            circles: vec![CircleObstacle {
+                x: 5.0,
+                y: 5.0,
+                r: 1.0,
+            }],
+            rectangles: vec![RectObstacle {
+                x_min: 1.0,
+                y_min: 7.0,
+                x_max: 2.0,
+                y_max: 8.0,
+            }],
+            polygons: vec![PolygonObstacle {
+                points: vec![[7.0, 1.0], [8.0, 1.0], [7.5, 2.0]],
+            }],
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn ray_hits_circle_at_known_distance() {
+        let t = map().cast((2.0, 5.0), 0.0, 10.0).unwrap();
+        assert!((t - 2.0).abs() < 1e-9, "{t}");
+    }
+
+    #[test]
+    fn ray_hits_wall_and_misses_beyond_range() {
+        let m = map();
+        let t = m.cast((2.0, 2.0), std::f64::consts::PI, 10.0).unwrap();
+        assert!((t - 2.0).abs() < 1e-9, "{t}");
+        assert_eq!(m.cast((2.0, 2.0), std::f64::consts::PI, 1.5), None);
+    }
+
+    #[test]
+    fn clearance_to_rectangle_and_polygon() {
+        let m = map();
+        assert!((m.clearance((1.5, 6.5)) - 0.5).abs() < 1e-9);
+        assert_eq!(m.clearance((7.5, 1.2)), 0.0);
+        assert!((m.clearance((5.0, 3.0)) - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn line_of_sight_is_blocked_by_the_circle() {
+        let m = map();
+        assert!(m.blocks((3.0, 5.0), (7.0, 5.0)));
+        assert!(!m.blocks((3.0, 3.0), (7.0, 3.0)));
+    }
+
+    #[test]
+    fn degenerate_polygon_is_refused_with_its_key() {
+        let mut cfg = MapConfig {
+            bounds: [0.0, 0.0, 10.0, 10.0],
+            goal: Goal {
+                x: 1.0,
+                y: 1.0,
+                radius: 0.5,
+            },
+            circles: vec![],
+            rectangles: vec![],
+            polygons: vec![PolygonObstacle {
+                points: vec![[1.0, 1.0], [2.0, 2.0], [3.0, 3.0]],
+            }],
+        };
+        let e = Map::build(&cfg).err().unwrap();
+        assert_eq!(e.key, "map.polygons[0].points");
+        cfg.polygons.clear();
+        assert!(Map::build(&cfg).is_ok());
+    }
+}

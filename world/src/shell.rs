@@ -1,0 +1,262 @@
+//! The world process shell: creates the run's services, waits for every robot's hello, then
+//! runs lock-step ticks. It sleeps in an iceoryx2 listener while robots think; commands,
+//! and control lines from the orchestrator (relayed by a small thread), wake it.
+
+use std::collections::BTreeSet;
+use std::io::{BufRead, Write};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use crossbeam_channel::{Receiver, TryRecvError};
+use iceoryx2::prelude::*;
+use swarmrt_protocol::config::Config;
+use swarmrt_protocol::control::{Control, Report};
+use swarmrt_protocol::ipc::{self, IpcError};
+use swarmrt_protocol::services::{EVENT_CONTROL, RunServices};
+use swarmrt_protocol::{
+    Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION, RobotState,
+};
+
+use crate::records::Recorder;
+use crate::world::World;
+
+/// Longest the world waits for all robots to say hello.
+const STARTUP_TIMEOUT: Duration = Duration::from_secs(120);
+/// Minimum interval between progress reports on stdout.
+const PROGRESS_EVERY: Duration = Duration::from_millis(200);
+
+/// Numbers only the shell knows (wall-clock dependent, so kept out of the replayable records).
+#[derive(Debug, Default, serde::Serialize)]
+pub struct ShellStats {
+    /// Robot-ticks in which a robot answered after `scenario.deadline_ms`.
+    pub late: u64,
+    /// Commands from ids that are not robots of this run.
+    pub unknown_sender: u64,
+    /// Commands for a tick other than the current one (stale or early).
+    pub wrong_tick: u64,
+}
+
+fn report(r: &Report) {
+    let mut out = std::io::stdout().lock();
+    // If the orchestrator is gone there is nobody to tell; the run still finishes its records.
+    let _ = out.write_all(r.to_line().as_bytes());
+    let _ = out.flush();
+}
+
+/// Relays control lines from stdin to the main loop and wakes it through the command event.
+fn spawn_control_thread(run: RunServices) -> Receiver<Control> {
+    let (tx, rx) = crossbeam_channel::unbounded();
+    std::thread::spawn(move || {
+        let wake =
+            ipc::node(&run, &format!("{}-control", run.world_node_name())).and_then(|node| {
+                let ev = ipc::open_commands_event(&node, &run)?;
+                let n = ev
+                    .notifier_builder()
+                    .default_event_id(EventId::new(EVENT_CONTROL))
+                    .create()?;
+                Ok((node, n))
+            });
+        let (_node, notifier) = match wake {
+            Ok(x) => x,
+            Err(e) => {
+                tracing::error!("control thread cannot reach the world: {e}");
+                let _ = tx.send(Control::Stop);
+                return;
+            }
+        };
+        let stdin = std::io::stdin();
+        for line in stdin.lock().lines() {
+            let Ok(line) = line else { break };
+            match serde_json::from_str::<Control>(&line) {
+                Ok(c) => {
+                    if tx.send(c).is_err() {
+                        return;
+                    }
+                    let _ = notifier.notify();
+                }
+                Err(e) => tracing::warn!("ignoring control line {line:?}: {e}"),
+            }
+        }
+        // EOF: the orchestrator is gone; finish the records and stop.
+        let _ = tx.send(Control::Stop);
+        let _ = notifier.notify();
+    });
+    rx
+}
+
+/// Runs the world of `run` with `cfg`, writing records into `out_dir`.
+pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcError> {
+    let n = cfg.robots.count as usize;
+    let mut world = World::new(cfg).map_err(|e| format!("{}: {}", e.key, e.message))?;
+    let mut recorder = Recorder::create(out_dir)?;
+
+    let node = ipc::node(run, &run.world_node_name())?;
+    let services = ipc::create_services(&node, run, n)?;
+    let publisher = services
+        .observations
+        .publisher_builder()
+        .initial_max_slice_len(n)
+        .create()?;
+    let obs_notifier = services.observations_event.notifier_builder().create()?;
+    let subscriber = services.commands.subscriber_builder().create()?;
+    let listener = services.commands_event.listener_builder().create()?;
+    let control = spawn_control_thread(run.clone());
+    report(&Report::Listening);
+
+    let mut stats = ShellStats::default();
+    let started = Instant::now();
+    let mut interrupted = false;
+
+    // Phase 1: every robot says hello (or dies) before tick 0.
+    let mut waiting: BTreeSet<u32> = (0..n as u32).collect();
+    while !waiting.is_empty() && !interrupted {
+        while let Some(sample) = subscriber.receive()? {
+            let c = *sample.payload();
+            if c.version == PROTOCOL_VERSION
+                && CommandKind::from_u32(c.kind) == Some(CommandKind::Hello)
+                && waiting.remove(&c.robot)
+            {
+                tracing::debug!(robot = c.robot, pid = c.pid, "robot ready");
+            }
+        }
+        interrupted |= drain_control(&control, &mut world, &mut waiting)?;
+        if waiting.is_empty() || interrupted {
+            break;
+        }
+        if started.elapsed() > STARTUP_TIMEOUT {
+            return Err(format!(
+                "{} robots never said hello, e.g. robot {}",
+                waiting.len(),
+                waiting.first().copied().unwrap_or(0)
+            )
+            .into());
+        }
+        listener.timed_wait(|_| {}, Duration::from_millis(500))?;
+        interrupted |= node.wait(Duration::ZERO).is_err();
+    }
+    report(&Report::Ready {
+        startup_ms: started.elapsed().as_millis() as u64,
+    });
+
+    // Phase 2: lock-step ticks.
+    let deadline = Duration::from_millis(cfg.scenario.deadline_ms);
+    let mut obs = vec![Observation::empty(0, 0); n];
+    let mut commands: Vec<Option<Command>> = vec![None; n];
+    let mut last_progress = Instant::now();
+    let events = world.drain_events();
+    recorder.record(world.tick(), world.robots(), &events)?;
+    while !interrupted && !world.finished() {
+        let tick = world.tick();
+        world.observe(&mut obs);
+        let sample = publisher.loan_slice_uninit(n)?;
+        let mut sample = sample.write_from_slice(&obs);
+        *sample.user_header_mut() = ObservationHeader {
+            version: PROTOCOL_VERSION,
+            shutdown: 0,
+            tick,
+        };
+        sample.send()?;
+        obs_notifier.notify()?;
+
+        commands.iter_mut().for_each(|c| *c = None);
+        let mut waiting: BTreeSet<u32> = world
+            .robots()
+            .iter()
+            .filter(|r| r.state != RobotState::Dead)
+            .map(|r| r.id)
+            .collect();
+        let sent_at = Instant::now();
+        let mut late_logged = false;
+        loop {
+            while let Some(sample) = subscriber.receive()? {
+                let c = *sample.payload();
+                drop(sample);
+                let id = c.robot as usize;
+                if id >= n {
+                    stats.unknown_sender += 1;
+                    if stats.unknown_sender == 1 {
+                        tracing::warn!(robot = c.robot, "command from an unknown robot id");
+                    }
+                    continue;
+                }
+                if c.tick != tick || CommandKind::from_u32(c.kind) != Some(CommandKind::Act) {
+                    stats.wrong_tick += 1;
+                    continue;
+                }
+                if waiting.remove(&c.robot) {
+                    commands[id] = Some(c);
+                }
+            }
+            interrupted |= drain_control(&control, &mut world, &mut waiting)?;
+            if waiting.is_empty() || interrupted {
+                break;
+            }
+            let waited = sent_at.elapsed();
+            let timeout = if waited < deadline {
+                deadline - waited
+            } else {
+                if !late_logged {
+                    late_logged = true;
+                    stats.late += waiting.len() as u64;
+                    tracing::warn!(tick, late = ?waiting, "robots past the deadline");
+                }
+                Duration::from_millis(500)
+            };
+            listener.timed_wait(|_| {}, timeout)?;
+            interrupted |= node.wait(Duration::ZERO).is_err();
+        }
+        if interrupted {
+            break;
+        }
+        world.step(&commands);
+        let events = world.drain_events();
+        recorder.record(world.tick(), world.robots(), &events)?;
+        if last_progress.elapsed() >= PROGRESS_EVERY {
+            last_progress = Instant::now();
+            report(&Report::Tick { tick: world.tick() });
+        }
+    }
+
+    // Tell robots the run is over (a header-only sample), then report.
+    let sample = publisher.loan_slice_uninit(0)?;
+    let mut sample = sample.write_from_slice(&[]);
+    *sample.user_header_mut() = ObservationHeader {
+        version: PROTOCOL_VERSION,
+        shutdown: 1,
+        tick: world.tick(),
+    };
+    sample.send()?;
+    obs_notifier.notify()?;
+    let events = world.drain_events();
+    if !events.is_empty() {
+        recorder.record(world.tick(), world.robots(), &events)?;
+    }
+    let mut metrics = serde_json::to_value(world.metrics())?;
+    metrics["shell"] = serde_json::to_value(&stats)?;
+    report(&Report::Tick { tick: world.tick() });
+    report(&Report::Done {
+        interrupted,
+        metrics,
+    });
+    Ok(())
+}
+
+/// Applies pending control messages; returns true when the run must stop.
+fn drain_control(
+    control: &Receiver<Control>,
+    world: &mut World,
+    waiting: &mut BTreeSet<u32>,
+) -> Result<bool, IpcError> {
+    let mut stop = false;
+    loop {
+        match control.try_recv() {
+            Ok(Control::RobotDied { robot, reason }) => {
+                world.mark_dead(robot, &reason);
+                waiting.remove(&robot);
+            }
+            Ok(Control::Stop) => stop = true,
+            Err(TryRecvError::Empty) => return Ok(stop),
+            Err(TryRecvError::Disconnected) => return Ok(true),
+        }
+    }
+}

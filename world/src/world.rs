@@ -1,0 +1,565 @@
+//! The world core: a deterministic state machine. `observe` fills every robot's
+//! [`Observation`] for the current tick, `step` takes every robot's [`Command`] and advances
+//! one tick. No I/O, no clock; every random draw comes from the run seed.
+
+use rand_distr::{Distribution, Normal};
+use serde::Serialize;
+use std::collections::BTreeSet;
+use std::f64::consts::PI;
+use swarmrt_protocol::config::Config;
+use swarmrt_protocol::{
+    BROADCAST, Command, CommandKind, Frame, MAX_INBOX, MAX_LIDAR_RAYS, MAX_NEIGHBOURS, MAX_OUTBOX,
+    MAX_PAYLOAD, Neighbour, Observation, PROTOCOL_VERSION, RobotState,
+};
+
+use crate::grid::Grid;
+use crate::map::{Map, MapError};
+use crate::radio::{RadioMedium, RadioStats};
+use crate::rng::{self, Rng};
+
+/// The truth about one robot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Robot {
+    /// Robot id (index).
+    pub id: u32,
+    /// True x position, metres.
+    pub x: f64,
+    /// True y position, metres.
+    pub y: f64,
+    /// True heading, radians in (-pi, pi].
+    pub theta: f64,
+    /// Forward speed applied in the last step.
+    pub v: f64,
+    /// Turn rate applied in the last step.
+    pub omega: f64,
+    /// Whether the lidar is on for the current observation.
+    pub lidar_on: bool,
+    /// Lifecycle state.
+    pub state: RobotState,
+    /// First tick at which the robot was inside the goal radius.
+    pub reached_tick: Option<u64>,
+}
+
+/// Something worth a line in `events.jsonl`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "event", rename_all = "snake_case")]
+pub enum Event {
+    /// A robot hit an obstacle, a wall or another robot and went down.
+    Collision {
+        /// Tick of the step in which it happened.
+        tick: u64,
+        /// The robot that went down.
+        robot: u32,
+        /// The other robot, when it was a robot.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        other: Option<u32>,
+    },
+    /// A robot entered the goal radius for the first time.
+    Reached {
+        /// Tick at which it was first inside.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+    },
+    /// A robot's process is gone; it stays where it is as an obstacle.
+    Died {
+        /// Tick from which it counts as dead.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+        /// Why (e.g. "process exited: signal 9").
+        reason: String,
+    },
+    /// A robot sent a command the world refused (logged once per robot and reason).
+    Rejected {
+        /// Tick of the refused command.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+        /// What was wrong.
+        reason: String,
+    },
+}
+
+/// Scalar outcome of a run so far.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct WorldMetrics {
+    /// Ticks stepped.
+    pub ticks: u64,
+    /// Robots that reached the goal.
+    pub reached_target: u32,
+    /// Collision events.
+    pub collisions: u32,
+    /// Robots knocked down.
+    pub down: u32,
+    /// Robots whose process died.
+    pub dead: u32,
+    /// Robot-ticks with the lidar on (the energy metric).
+    pub lidar_on_ticks: u64,
+    /// Commands refused at the world boundary.
+    pub rejected: u64,
+    /// Radio counters.
+    pub radio: RadioStats,
+}
+
+/// The world of one run.
+pub struct World {
+    cfg: Config,
+    map: Map,
+    robots: Vec<Robot>,
+    radio: RadioMedium,
+    tick: u64,
+    sensor_rng: Vec<Rng>,
+    inboxes: Vec<Vec<Frame>>,
+    events: Vec<Event>,
+    rejected_once: BTreeSet<(u32, &'static str)>,
+    metrics: WorldMetrics,
+}
+
+/// Wraps an angle into (-pi, pi].
+pub fn wrap_angle(a: f64) -> f64 {
+    let mut a = a % (2.0 * PI);
+    if a <= -PI {
+        a += 2.0 * PI;
+    } else if a > PI {
+        a -= 2.0 * PI;
+    }
+    a
+}
+
+impl World {
+    /// Builds the world at tick 0 with every robot at its start position.
+    pub fn new(cfg: &Config) -> Result<World, MapError> {
+        let map = Map::build(&cfg.map)?;
+        let seed = cfg.scenario.seed;
+        let heading = wrap_angle(cfg.start_heading());
+        let robots: Vec<Robot> = cfg
+            .start_positions()
+            .into_iter()
+            .enumerate()
+            .map(|(i, (x, y))| Robot {
+                id: i as u32,
+                x,
+                y,
+                theta: heading,
+                v: 0.0,
+                omega: 0.0,
+                lidar_on: true,
+                state: RobotState::Active,
+                reached_tick: None,
+            })
+            .collect();
+        let n = robots.len();
+        for (i, r) in robots.iter().enumerate() {
+            if map.clearance((r.x, r.y)) < cfg.robots.radius {
+                return Err(MapError {
+                    key: "robots.start".to_string(),
+                    message: format!(
+                        "robot {i} would start inside an obstacle at ({:.2}, {:.2})",
+                        r.x, r.y
+                    ),
+                });
+            }
+        }
+        let mut world = World {
+            cfg: cfg.clone(),
+            map,
+            radio: RadioMedium::new(cfg.radio, seed, n),
+            tick: 0,
+            sensor_rng: (0..n)
+                .map(|i| rng::stream(seed, "sensor", i as u64))
+                .collect(),
+            inboxes: vec![Vec::new(); n],
+            events: Vec::new(),
+            rejected_once: BTreeSet::new(),
+            metrics: WorldMetrics::default(),
+            robots,
+        };
+        world.check_goal();
+        Ok(world)
+    }
+
+    /// The current tick (the one `observe` describes).
+    pub fn tick(&self) -> u64 {
+        self.tick
+    }
+
+    /// Every robot's true state.
+    pub fn robots(&self) -> &[Robot] {
+        &self.robots
+    }
+
+    /// The map, for queries such as line of sight.
+    pub fn map(&self) -> &Map {
+        &self.map
+    }
+
+    /// The config the world was built from.
+    pub fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    /// Metrics so far.
+    pub fn metrics(&self) -> WorldMetrics {
+        let mut m = self.metrics.clone();
+        m.radio = self.radio.stats();
+        m
+    }
+
+    /// Takes the events produced since the last call, in the order they happened.
+    pub fn drain_events(&mut self) -> Vec<Event> {
+        std::mem::take(&mut self.events)
+    }
+
+    /// True when the run should end: the tick budget is spent, or (with
+    /// `scenario.stop_when_done`) every robot reached the goal or is down or dead.
+    pub fn finished(&self) -> bool {
+        self.tick >= self.cfg.scenario.ticks
+            || (self.cfg.scenario.stop_when_done
+                && self
+                    .robots
+                    .iter()
+                    .all(|r| r.reached_tick.is_some() || r.state != RobotState::Active))
+    }
+
+    /// Marks a robot whose process is gone as dead from the current tick; it stays as an
+    /// obstacle. Idempotent.
+    pub fn mark_dead(&mut self, robot: u32, reason: &str) {
+        let Some(r) = self.robots.get_mut(robot as usize) else {
+            return;
+        };
+        if r.state == RobotState::Dead {
+            return;
+        }
+        r.state = RobotState::Dead;
+        r.v = 0.0;
+        r.omega = 0.0;
+        r.lidar_on = false;
+        self.metrics.dead += 1;
+        self.events.push(Event::Died {
+            tick: self.tick,
+            robot,
+            reason: reason.to_string(),
+        });
+    }
+
+    /// Fills `out[i]` with robot i's observation of the current tick. Draws sensor noise, so
+    /// call it exactly once per tick.
+    pub fn observe(&mut self, out: &mut [Observation]) {
+        let n = self.robots.len();
+        assert_eq!(out.len(), n, "one observation slot per robot");
+        let positions: Vec<(f64, f64)> = self.robots.iter().map(|r| (r.x, r.y)).collect();
+        let lidar = self.cfg.robots.lidar;
+        let rb_range = self.cfg.robots.range_bearing.range;
+        let radius = self.cfg.robots.radius;
+        let grid = Grid::build(&positions, lidar.range.max(rb_range).max(4.0 * radius));
+        let noise = self.cfg.robots.noise;
+        let goal = self.cfg.map.goal;
+        let goal_sensor = self.cfg.robots.goal_sensor;
+        let mut near: Vec<(f64, u32)> = Vec::new();
+        for (i, o) in out.iter_mut().enumerate() {
+            let r = &self.robots[i];
+            *o = Observation::empty(i as u32, self.tick);
+            o.state = r.state as u8;
+            o.reached = r.reached_tick.is_some() as u8;
+            let rng = &mut self.sensor_rng[i];
+            o.x = r.x + gauss(rng, noise.pose);
+            o.y = r.y + gauss(rng, noise.pose);
+            o.theta = wrap_angle(r.theta + gauss(rng, noise.heading));
+            if r.state != RobotState::Active {
+                continue;
+            }
+            if r.lidar_on {
+                let rays = (lidar.rays as usize).min(MAX_LIDAR_RAYS);
+                // Other robots' bodies within lidar range are obstacles too.
+                near.clear();
+                grid.near((r.x, r.y), lidar.range + radius, |j| {
+                    if j != i {
+                        near.push((0.0, j as u32));
+                    }
+                });
+                for k in 0..rays {
+                    let angle = r.theta + lidar.ray_angle(k);
+                    let mut d = self
+                        .map
+                        .cast((r.x, r.y), angle, lidar.range)
+                        .unwrap_or(lidar.range);
+                    for &(_, j) in &near {
+                        let q = &self.robots[j as usize];
+                        if let Some(t) = ray_circle((r.x, r.y), angle, (q.x, q.y), radius) {
+                            d = d.min(t);
+                        }
+                    }
+                    let d = (d + gauss(rng, noise.lidar)).clamp(0.0, lidar.range);
+                    o.lidar[k] = d;
+                }
+                o.lidar_len = rays as u16;
+            }
+            // Range-and-bearing: other robots with their emitter on, nearest first.
+            near.clear();
+            grid.near((r.x, r.y), rb_range, |j| {
+                let q = &self.robots[j];
+                if j != i && q.state == RobotState::Active {
+                    let d = ((q.x - r.x).powi(2) + (q.y - r.y).powi(2)).sqrt();
+                    if d <= rb_range {
+                        near.push((d, j as u32));
+                    }
+                }
+            });
+            near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            for (slot, &(d, j)) in near.iter().take(MAX_NEIGHBOURS).enumerate() {
+                let q = &self.robots[j as usize];
+                o.neighbours[slot] = Neighbour {
+                    id: j,
+                    range: d,
+                    bearing: wrap_angle((q.y - r.y).atan2(q.x - r.x) - r.theta),
+                };
+            }
+            o.neighbours_len = near.len().min(MAX_NEIGHBOURS) as u16;
+            let gd = ((goal.x - r.x).powi(2) + (goal.y - r.y).powi(2)).sqrt();
+            let gb = wrap_angle((goal.y - r.y).atan2(goal.x - r.x) - r.theta);
+            if gd <= goal_sensor.range && gb.abs() <= goal_sensor.fov_deg.to_radians() / 2.0 {
+                o.goal_visible = 1;
+                o.goal_range = gd;
+                o.goal_bearing = gb;
+            }
+            let inbox = &self.inboxes[i];
+            for (slot, f) in inbox.iter().take(MAX_INBOX).enumerate() {
+                o.inbox[slot] = *f;
+            }
+            o.inbox_len = inbox.len().min(MAX_INBOX) as u16;
+        }
+        for r in &self.robots {
+            if r.state == RobotState::Active && r.lidar_on {
+                self.metrics.lidar_on_ticks += 1;
+            }
+        }
+    }
+
+    /// Checks a command against the protocol and the robot's limits; `Err` names the problem.
+    pub fn validate(&self, robot: usize, cmd: &Command) -> Result<(), &'static str> {
+        let lim = &self.cfg.robots;
+        if cmd.version != PROTOCOL_VERSION {
+            return Err("wrong protocol version");
+        }
+        if cmd.robot as usize != robot {
+            return Err("robot id does not match its slot");
+        }
+        if CommandKind::from_u32(cmd.kind) != Some(CommandKind::Act) {
+            return Err("not an Act command");
+        }
+        if cmd.tick != self.tick {
+            return Err("command for another tick");
+        }
+        if !cmd.v.is_finite() || !cmd.omega.is_finite() {
+            return Err("non-finite speed");
+        }
+        let eps = 1e-9;
+        if cmd.v.abs() > lim.max_speed * (1.0 + eps) + eps
+            || cmd.omega.abs() > lim.max_turn_rate * (1.0 + eps) + eps
+        {
+            return Err("speed out of range");
+        }
+        if cmd.outbox_len as usize > MAX_OUTBOX {
+            return Err("outbox length out of range");
+        }
+        for f in cmd.outbox() {
+            if f.len as usize > MAX_PAYLOAD {
+                return Err("oversized radio frame");
+            }
+            if f.dst != BROADCAST && f.dst as usize >= self.robots.len() {
+                return Err("radio frame to an unknown robot");
+            }
+        }
+        Ok(())
+    }
+
+    /// Advances one tick. `commands[i]` is robot i's answer to this tick's observation, or
+    /// `None` if it sent none (dead, or a shell that gave up waiting). Invalid commands are
+    /// refused, counted and treated as "stop, send nothing".
+    pub fn step(&mut self, commands: &[Option<Command>]) {
+        let n = self.robots.len();
+        assert_eq!(commands.len(), n, "one command slot per robot");
+        let tick = self.tick;
+        let dt = self.cfg.scenario.dt;
+        let radius = self.cfg.robots.radius;
+
+        // 1. Accept or refuse each command.
+        let mut accepted: Vec<Option<&Command>> = vec![None; n];
+        for i in 0..n {
+            if self.robots[i].state != RobotState::Active {
+                continue;
+            }
+            if let Some(cmd) = &commands[i] {
+                match self.validate(i, cmd) {
+                    Ok(()) => accepted[i] = Some(cmd),
+                    Err(reason) => self.reject(i as u32, reason),
+                }
+            }
+        }
+
+        // 2. Radio: route what robots sent at this tick, from where they were when sending.
+        let positions: Vec<(f64, f64)> = self.robots.iter().map(|r| (r.x, r.y)).collect();
+        let can_talk: Vec<bool> = self
+            .robots
+            .iter()
+            .map(|r| r.state == RobotState::Active)
+            .collect();
+        let outboxes: Vec<&[Frame]> = accepted
+            .iter()
+            .map(|c| c.map(|c| c.outbox()).unwrap_or(&[]))
+            .collect();
+        let map = &self.map;
+        let mut blocked = |a: usize, b: usize| map.blocks(positions[a], positions[b]);
+        self.radio
+            .send(tick, &outboxes, &positions, &can_talk, &mut blocked);
+
+        // 3. Kinematics (unicycle, heading first then position) with swept obstacle checks.
+        for i in 0..n {
+            let r = &mut self.robots[i];
+            if r.state != RobotState::Active {
+                r.v = 0.0;
+                r.omega = 0.0;
+                continue;
+            }
+            let (v, omega, lidar) = match accepted[i] {
+                Some(c) => (c.v, c.omega, c.lidar_on != 0),
+                None => (0.0, 0.0, r.lidar_on),
+            };
+            r.v = v;
+            r.omega = omega;
+            r.lidar_on = lidar;
+            r.theta = wrap_angle(r.theta + omega * dt);
+            let (dx, dy) = (v * dt * r.theta.cos(), v * dt * r.theta.sin());
+            let dist = (dx * dx + dy * dy).sqrt();
+            let sub = ((dist / (radius * 0.5)).ceil() as usize).max(1);
+            let (x0, y0) = (r.x, r.y);
+            for s in 1..=sub {
+                let f = s as f64 / sub as f64;
+                r.x = x0 + dx * f;
+                r.y = y0 + dy * f;
+                if self.map.clearance((r.x, r.y)) < radius {
+                    r.state = RobotState::Down;
+                    break;
+                }
+            }
+            if r.state == RobotState::Down {
+                self.metrics.collisions += 1;
+                self.metrics.down += 1;
+                self.events.push(Event::Collision {
+                    tick,
+                    robot: i as u32,
+                    other: None,
+                });
+            }
+        }
+
+        // 4. Robot-robot contacts: both go down (a down or dead robot is an obstacle).
+        let positions: Vec<(f64, f64)> = self.robots.iter().map(|r| (r.x, r.y)).collect();
+        let grid = Grid::build(&positions, 2.0 * radius);
+        let mut pairs: Vec<(usize, usize)> = Vec::new();
+        for i in 0..n {
+            if self.robots[i].state != RobotState::Active {
+                continue;
+            }
+            grid.near(positions[i], 2.0 * radius, |j| {
+                if j != i {
+                    let d = ((positions[j].0 - positions[i].0).powi(2)
+                        + (positions[j].1 - positions[i].1).powi(2))
+                    .sqrt();
+                    if d < 2.0 * radius {
+                        pairs.push((i.min(j), i.max(j)));
+                    }
+                }
+            });
+        }
+        pairs.sort_unstable();
+        pairs.dedup();
+        for (a, b) in pairs {
+            for (me, other) in [(a, b), (b, a)] {
+                if self.robots[me].state == RobotState::Active {
+                    self.robots[me].state = RobotState::Down;
+                    self.metrics.collisions += 1;
+                    self.metrics.down += 1;
+                    self.events.push(Event::Collision {
+                        tick,
+                        robot: me as u32,
+                        other: Some(other as u32),
+                    });
+                }
+            }
+        }
+
+        // 5. Advance time, deliver what is due, note arrivals.
+        self.tick += 1;
+        self.metrics.ticks = self.tick;
+        let can_talk: Vec<bool> = self
+            .robots
+            .iter()
+            .map(|r| r.state == RobotState::Active)
+            .collect();
+        self.radio.deliver(self.tick, &can_talk, &mut self.inboxes);
+        self.check_goal();
+    }
+
+    fn check_goal(&mut self) {
+        let g = self.cfg.map.goal;
+        for r in &mut self.robots {
+            if r.reached_tick.is_none()
+                && r.state == RobotState::Active
+                && (r.x - g.x).powi(2) + (r.y - g.y).powi(2) <= g.radius * g.radius
+            {
+                r.reached_tick = Some(self.tick);
+                self.metrics.reached_target += 1;
+                self.events.push(Event::Reached {
+                    tick: self.tick,
+                    robot: r.id,
+                });
+            }
+        }
+    }
+
+    /// Counts a refused command; the first refusal per robot and reason becomes an event.
+    pub fn reject(&mut self, robot: u32, reason: &'static str) {
+        self.metrics.rejected += 1;
+        if (robot as usize) < self.robots.len() && self.rejected_once.insert((robot, reason)) {
+            tracing::warn!(robot, reason, tick = self.tick, "command rejected");
+            self.events.push(Event::Rejected {
+                tick: self.tick,
+                robot,
+                reason: reason.to_string(),
+            });
+        }
+    }
+}
+
+/// Gaussian noise with standard deviation `sd`; draws nothing when `sd` is zero so a
+/// noiseless run consumes no randomness.
+fn gauss(rng: &mut Rng, sd: f64) -> f64 {
+    if sd > 0.0 {
+        Normal::new(0.0, sd).map(|d| d.sample(rng)).unwrap_or(0.0)
+    } else {
+        0.0
+    }
+}
+
+/// Distance along the ray from `o` at `angle` to the circle (`c`, `r`), if it hits ahead.
+fn ray_circle(o: (f64, f64), angle: f64, c: (f64, f64), r: f64) -> Option<f64> {
+    let (dx, dy) = (angle.cos(), angle.sin());
+    let (fx, fy) = (o.0 - c.0, o.1 - c.1);
+    let b = fx * dx + fy * dy;
+    let cc = fx * fx + fy * fy - r * r;
+    let disc = b * b - cc;
+    if disc < 0.0 {
+        return None;
+    }
+    let s = disc.sqrt();
+    let t = -b - s;
+    if t >= 0.0 {
+        Some(t)
+    } else if -b + s >= 0.0 {
+        Some(0.0)
+    } else {
+        None
+    }
+}
