@@ -82,7 +82,7 @@ fn track_colour(i: usize) -> RGBColor {
         return *c;
     }
     let hue = (i as f64 * 0.618_033_988_75).fract();
-    let light = if i % 2 == 0 { 0.42 } else { 0.55 };
+    let light = if i.is_multiple_of(2) { 0.42 } else { 0.55 };
     let bc = HSLColor(hue, 0.70, light).to_backend_color();
     RGBColor(bc.rgb.0, bc.rgb.1, bc.rgb.2)
 }
@@ -282,7 +282,7 @@ fn legend_widths() -> Vec<i32> {
 
 /// Greedy wrapping of the legend items into rows that fit `width` pixels.
 fn legend_rows(width: u32, widths: &[i32]) -> Vec<Vec<usize>> {
-    let avail = width as i32 - 16;
+    let avail = width as i32 - 60;
     let mut rows: Vec<Vec<usize>> = vec![Vec::new()];
     let mut used = 0;
     for (i, &w) in widths.iter().enumerate() {
@@ -301,7 +301,18 @@ fn legend_rows(width: u32, widths: &[i32]) -> Vec<Vec<usize>> {
 /// Tick label text: fixed decimals chosen from the span, scientific for huge values.
 fn tick_label(v: f64, span: f64, max_abs: f64) -> String {
     if max_abs >= 1e5 {
-        return format!("{v:.2e}");
+        if v == 0.0 {
+            return "0".to_string();
+        }
+        // "1.50e6" -> "1.5e6", "1.00e6" -> "1e6".
+        let sci = format!("{v:.2e}");
+        return match sci.split_once('e') {
+            Some((mantissa, exp)) if mantissa.contains('.') => {
+                let m = mantissa.trim_end_matches('0').trim_end_matches('.');
+                format!("{m}e{exp}")
+            }
+            _ => sci,
+        };
     }
     let decimals = (1.0 - span.log10().floor()).clamp(0.0, 6.0) as usize;
     let s = format!("{v:.decimals$}");
@@ -327,7 +338,7 @@ fn title(cfg: &Config, n: usize) -> String {
 
 /// Points of a closed circle polygon in data coordinates.
 fn circle_points(cx: f64, cy: f64, r: f64) -> Vec<(f64, f64)> {
-    const N: usize = 72;
+    const N: usize = 128;
     (0..=N)
         .map(|k| {
             let a = std::f64::consts::TAU * k as f64 / N as f64;
@@ -496,12 +507,11 @@ fn draw_figure<DB: DrawingBackend>(
             .and_then(|()| area.draw(&PathElement::new(ring, OBSTACLE_EDGE.stroke_width(1))))
             .map_err(draw_err("polygon obstacle"))?;
     }
+    // A closed path rather than a rectangle: the SVG backend ignores a rectangle's stroke width.
     let [bx0, by0, bx1, by1] = map.bounds;
-    area.draw(&Rectangle::new(
-        [(bx0, by0), (bx1, by1)],
-        BLACK.stroke_width(2),
-    ))
-    .map_err(draw_err("bounds"))?;
+    let frame = vec![(bx0, by0), (bx1, by0), (bx1, by1), (bx0, by1), (bx0, by0)];
+    area.draw(&PathElement::new(frame, BLACK.stroke_width(2)))
+        .map_err(draw_err("bounds"))?;
     area.draw(&PathElement::new(goal_ring, GOAL.stroke_width(2)))
         .map_err(draw_err("goal"))?;
 
@@ -672,12 +682,6 @@ radius = 0.2
         (w, h)
     }
 
-    pub(super) fn config_pub(b: [f64; 4]) -> Config {
-        config(b)
-    }
-    pub(super) fn three_tracks_pub(c: &Config) -> Vec<RobotTrack> {
-        three_tracks(c)
-    }
     const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
 
     fn render(cfg: &Config, tracks: &[RobotTrack]) -> (String, Vec<u8>) {
@@ -736,6 +740,16 @@ radius = 0.2
         let sy = f64::from(lay.plot_h) / (lay.y.1 - lay.y.0);
         assert!((sx - sy).abs() / sx < 1e-9, "x scale {sx} vs y scale {sy}");
         assert!(lay.x.0 < 0.0 && lay.x.1 > 20.0 && lay.y.0 < 0.0 && lay.y.1 > 10.0);
+    }
+
+    #[test]
+    fn plot_tick_labels() {
+        assert_eq!(tick_label(2.0, 20.0, 20.0), "2");
+        assert_eq!(tick_label(0.5, 5.0, 5.0), "0.5");
+        assert_eq!(tick_label(-0.0, 5.0, 5.0), "0.0");
+        assert_eq!(tick_label(1.5e6, 4e6, 3e6), "1.5e6");
+        assert_eq!(tick_label(-1e6, 4e6, 3e6), "-1e6");
+        assert_eq!(tick_label(0.0, 4e6, 3e6), "0");
     }
 
     #[test]
@@ -804,56 +818,5 @@ radius = 0.2
         assert_eq!(png[..8], PNG_SIGNATURE);
         let (w, h) = png_size(&png);
         assert_eq!(w.max(h), LONG_SIDE);
-    }
-}
-#[cfg(test)]
-mod tmp_example {
-    use super::*;
-    #[test]
-    fn tmp_render_examples() {
-        let Ok(dir) = std::env::var("PLOT_EXAMPLE_DIR") else {
-            return;
-        };
-        let dir = std::path::PathBuf::from(dir);
-        for (name, b) in [
-            ("wide", [0.0, 0.0, 20.0, 10.0]),
-            ("tall", [-5.0, -10.0, 5.0, 10.0]),
-            ("square", [0.0, 0.0, 12.0, 12.0]),
-        ] {
-            let cfg = super::tests::config_pub(b);
-            let tracks = super::tests::three_tracks_pub(&cfg);
-            write_trajectory_plots(
-                &cfg,
-                &tracks,
-                &dir.join(format!("{name}.svg")),
-                &dir.join(format!("{name}.png")),
-            )
-            .unwrap();
-        }
-        let cfg = super::tests::config_pub([0.0, 0.0, 20.0, 10.0]);
-        let tracks: Vec<RobotTrack> = (0..300u32)
-            .map(|id| {
-                let a = f64::from(id) * 0.021;
-                RobotTrack {
-                    id,
-                    points: (0..60)
-                        .map(|k| {
-                            let r = 0.5 + f64::from(k) * 0.07;
-                            (
-                                10.0 + r * (a + f64::from(k) * 0.03).cos() * 1.8,
-                                5.0 + r * (a + f64::from(k) * 0.03).sin(),
-                            )
-                        })
-                        .collect(),
-                    final_state: if id % 7 == 0 {
-                        RobotState::Dead
-                    } else {
-                        RobotState::Active
-                    },
-                }
-            })
-            .collect();
-        write_trajectory_plots(&cfg, &tracks, &dir.join("many.svg"), &dir.join("many.png"))
-            .unwrap();
     }
 }

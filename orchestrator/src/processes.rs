@@ -40,6 +40,8 @@ pub struct ProcessOutcome {
     pub unscheduled_deaths: BTreeMap<u32, String>,
     /// Milliseconds from the world listening until every robot said hello.
     pub startup_ms: Option<u64>,
+    /// The run id naming the run's iceoryx2 resources.
+    pub run_id: String,
 }
 
 enum Msg {
@@ -159,7 +161,10 @@ pub fn run(
     let result = supervise(cfg, config_path, dir, &run, interrupt, &mut progress);
     let removed = cleanup::remove_run(&run_id);
     tracing::debug!(run_id, removed, "run resources removed");
-    result
+    result.map(|mut o| {
+        o.run_id = run_id;
+        o
+    })
 }
 
 fn supervise(

@@ -415,14 +415,14 @@ impl World {
             .send(tick, &outboxes, &positions, &can_talk, &mut blocked);
 
         // 3. Kinematics (unicycle, heading first then position) with swept obstacle checks.
-        for i in 0..n {
+        for (i, accepted) in accepted.iter().enumerate() {
             let r = &mut self.robots[i];
             if r.state != RobotState::Active {
                 r.v = 0.0;
                 r.omega = 0.0;
                 continue;
             }
-            let (v, omega, lidar) = match accepted[i] {
+            let (v, omega, lidar) = match accepted {
                 Some(c) => (c.v, c.omega, c.lidar_on != 0),
                 None => (0.0, 0.0, r.lidar_on),
             };

@@ -21,6 +21,10 @@ pub struct Goto {
     max_speed: f64,
     max_turn: f64,
     slot: (f64, f64),
+    goal: (f64, f64),
+    goal_radius: f64,
+    /// The side (+1 left, -1 right) this robot committed to while going around an obstacle.
+    avoid_side: Option<f64>,
 }
 
 /// Distance to the slot under which the robot stops.
@@ -42,6 +46,9 @@ impl Goto {
             max_speed: cfg.robots.max_speed,
             max_turn: cfg.robots.max_turn_rate,
             slot: slots[id as usize],
+            goal: (g.x, g.y),
+            goal_radius: g.radius,
+            avoid_side: None,
         }
     }
 
@@ -66,7 +73,7 @@ impl Behaviour for Goto {
         let mut cmd = Command::act(self.id, obs.tick);
         cmd.lidar_on = 1;
         let p = self.params;
-        if p.beacon_period > 0 && (obs.tick + self.id as u64) % p.beacon_period as u64 == 0 {
+        if p.beacon_period > 0 && (obs.tick + self.id as u64).is_multiple_of(p.beacon_period as u64) {
             let beacon = RadioMsg::Beacon {
                 x: obs.x,
                 y: obs.y,
@@ -86,8 +93,10 @@ impl Behaviour for Goto {
         // Slow down when facing away and when close, so the robot does not orbit its slot.
         let mut v = p.speed * err.cos().max(0.0) * (dist / (4.0 * self.radius)).min(1.0);
 
-        // Avoidance: nearest return in the sector ahead, and which side is more open.
+        // Avoidance: nearest return in the sector ahead, which side is more open, and what
+        // the ray closest to the slot's direction sees.
         let (mut nearest, mut left, mut right) = (f64::INFINITY, 0.0, 0.0);
+        let (mut toward_slot, mut best) = (f64::INFINITY, f64::INFINITY);
         for (k, &d) in obs.lidar().iter().enumerate() {
             let a = self.lidar.ray_angle(k);
             if a.abs() <= AHEAD {
@@ -98,16 +107,40 @@ impl Behaviour for Goto {
             } else if a < 0.0 {
                 right += d;
             }
+            if (a - err).abs() < best {
+                best = (a - err).abs();
+                toward_slot = d;
+            }
         }
+        let goal = self.goal;
+        let in_goal_area = ((obs.x - goal.0).powi(2) + (obs.y - goal.1).powi(2)).sqrt() < self.goal_radius * 0.9;
         // Only obstacles closer than the slot matter.
         if nearest < p.avoid_distance && nearest < dist {
-            let side = if left >= right { 1.0 } else { -1.0 };
-            let urgency =
-                1.0 - (nearest - self.radius).max(0.0) / (p.avoid_distance - self.radius).max(1e-6);
+            if in_goal_area {
+                // Inside the goal area but blocked, most likely by a robot parked at its
+                // slot: park here instead of circling.
+                return cmd;
+            }
+            // Commit to one side until the way to the slot is open: choosing afresh each
+            // tick dithers left-right in front of an obstacle (a local minimum).
+            let side = *self
+                .avoid_side
+                .get_or_insert(if left >= right { 1.0 } else { -1.0 });
+            let urgency = 1.0
+                - (nearest - self.radius).max(0.0) / (p.avoid_distance - self.radius).max(1e-6);
             omega = side * self.max_turn * urgency.clamp(0.3, 1.0);
-            v *= (1.0 - urgency).clamp(0.0, 1.0);
+            v = p.speed * (1.0 - urgency).clamp(0.0, 1.0);
             if nearest < self.radius + 0.1 {
                 v = 0.0;
+            }
+        } else if let Some(side) = self.avoid_side {
+            if toward_slot < p.avoid_distance.max(dist.min(1.5 * p.avoid_distance)) && best < AHEAD * 2.0 {
+                // The slot is still behind the obstacle: follow its edge, bending back
+                // toward it slowly so the robot goes around instead of away.
+                omega = -side * 0.3 * self.max_turn;
+                v = p.speed;
+            } else {
+                self.avoid_side = None;
             }
         }
 

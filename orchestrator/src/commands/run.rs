@@ -85,6 +85,7 @@ pub fn run(
         if let Some(w) = out.world_metrics {
             merge(&mut metrics, w);
         }
+        metrics["run_id"] = json!(out.run_id);
         metrics["interrupted"] = json!(out.interrupted);
         metrics["startup_ms"] = json!(out.startup_ms);
         metrics["unscheduled_deaths"] = json!(

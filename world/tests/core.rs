@@ -1,0 +1,285 @@
+//! The world core against known geometry: kinematics, collisions, lidar, sensors, command
+//! validation and determinism.
+
+use std::f64::consts::PI;
+use swarmrt_protocol::config::Config;
+use swarmrt_protocol::{Command, MAX_OUTBOX, Observation, RadioMsg, RobotState, BROADCAST};
+use swarmrt_world::{Event, World};
+
+/// One robot at (2, 2) facing +x, a circle at (6, 2), walls at 0 and 10.
+fn config(extra: &[&str]) -> Config {
+    let text = r#"
+[scenario]
+name = "core"
+ticks = 1000
+dt = 0.1
+stop_when_done = false
+[map]
+bounds = [0.0, 0.0, 10.0, 10.0]
+goal = { x = 9.0, y = 9.0, radius = 0.5 }
+circles = [{ x = 6.0, y = 2.0, r = 1.0 }]
+[robots]
+count = 1
+radius = 0.2
+max_speed = 2.0
+max_turn_rate = 4.0
+start = { x = 2.0, y = 2.0, spacing = 1.0, heading_deg = 0.0 }
+lidar = { rays = 3, fov_deg = 180.0, range = 5.0 }
+"#;
+    let ov: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
+    Config::from_toml_str("core.toml", text, &ov).unwrap()
+}
+
+fn drive(world: &mut World, v: f64, omega: f64, ticks: usize) {
+    let n = world.robots().len();
+    let mut obs = vec![Observation::empty(0, 0); n];
+    for _ in 0..ticks {
+        world.observe(&mut obs);
+        let cmds: Vec<_> = (0..n)
+            .map(|i| {
+                let mut c = Command::act(i as u32, world.tick());
+                c.v = v;
+                c.omega = omega;
+                c.lidar_on = 1;
+                Some(c)
+            })
+            .collect();
+        world.step(&cmds);
+    }
+}
+
+#[test]
+fn unicycle_moves_straight_and_turns() {
+    let mut w = World::new(&config(&[])).unwrap();
+    drive(&mut w, 1.0, 0.0, 10);
+    let r = &w.robots()[0];
+    assert!((r.x - 3.0).abs() < 1e-9 && (r.y - 2.0).abs() < 1e-9, "{r:?}");
+    // A quarter turn at pi/2 rad/s over 1 s, standing still.
+    drive(&mut w, 0.0, PI / 2.0, 10);
+    assert!((w.robots()[0].theta - PI / 2.0).abs() < 1e-9);
+    drive(&mut w, 1.0, 0.0, 10);
+    let r = &w.robots()[0];
+    assert!((r.x - 3.0).abs() < 1e-9 && (r.y - 3.0).abs() < 1e-9, "{r:?}");
+}
+
+#[test]
+fn out_of_range_speed_is_rejected_not_clamped() {
+    let mut w = World::new(&config(&[])).unwrap();
+    drive(&mut w, 5.0, 0.0, 3);
+    assert_eq!(w.robots()[0].x, 2.0, "a refused command means stop");
+    assert_eq!(w.metrics().rejected, 3);
+    let events = w.drain_events();
+    assert_eq!(events.len(), 1, "logged once per robot and reason: {events:?}");
+    assert!(matches!(&events[0], Event::Rejected { reason, .. } if reason == "speed out of range"));
+}
+
+#[test]
+fn nan_wrong_version_wrong_tick_and_bad_frames_are_rejected() {
+    let w = World::new(&config(&[])).unwrap();
+    let good = Command::act(0, 0);
+    assert_eq!(w.validate(0, &good), Ok(()));
+    let mut c = good;
+    c.v = f64::NAN;
+    assert!(w.validate(0, &c).is_err());
+    let mut c = good;
+    c.version = 99;
+    assert!(w.validate(0, &c).is_err());
+    let mut c = good;
+    c.tick = 7;
+    assert!(w.validate(0, &c).is_err());
+    let mut c = good;
+    c.outbox_len = MAX_OUTBOX as u16 + 1;
+    assert!(w.validate(0, &c).is_err());
+    let mut c = good;
+    c.push_frame(BROADCAST, &RadioMsg::Beacon { x: 0.0, y: 0.0, theta: 0.0 }).unwrap();
+    c.outbox[0].len = 500;
+    assert_eq!(w.validate(0, &c), Err("oversized radio frame"));
+    let mut c = good;
+    c.push_frame(42, &RadioMsg::Beacon { x: 0.0, y: 0.0, theta: 0.0 }).unwrap();
+    assert_eq!(w.validate(0, &c), Err("radio frame to an unknown robot"));
+    assert_eq!(w.validate(1, &good), Err("robot id does not match its slot"));
+}
+
+#[test]
+fn hitting_an_obstacle_knocks_the_robot_down_where_it_stands() {
+    let mut w = World::new(&config(&[])).unwrap();
+    // Surface of the circle is at x = 5; the robot's edge touches at x = 4.8.
+    drive(&mut w, 2.0, 0.0, 30);
+    let r = w.robots()[0].clone();
+    assert_eq!(r.state, RobotState::Down);
+    assert!(r.x < 4.8 + 1e-9 && r.x > 4.5, "stopped at the obstacle, not inside: {}", r.x);
+    assert_eq!(w.metrics().collisions, 1);
+    assert_eq!(w.metrics().down, 1);
+    let x = r.x;
+    drive(&mut w, 2.0, 0.0, 5);
+    assert_eq!(w.robots()[0].x, x, "a down robot stays where it is");
+}
+
+#[test]
+fn fast_robot_does_not_tunnel_through_a_thin_wall() {
+    let mut cfg = config(&["robots.max_speed=100.0"]);
+    cfg.map.circles.clear();
+    cfg.map.rectangles.push(swarmrt_protocol::config::RectObstacle {
+        x_min: 4.0,
+        y_min: 0.5,
+        x_max: 4.05,
+        y_max: 3.5,
+    });
+    let mut w = World::new(&cfg).unwrap();
+    drive(&mut w, 50.0, 0.0, 1); // 5 m in one tick
+    assert_eq!(w.robots()[0].state, RobotState::Down);
+    assert!(w.robots()[0].x < 4.0);
+}
+
+#[test]
+fn robots_colliding_both_go_down() {
+    let cfg = config(&[
+        "robots.count=2",
+        "robots.start={ x = 2.5, y = 6.0, spacing = 1.0, heading_deg = 0.0 }",
+    ]);
+    let mut w = World::new(&cfg).unwrap();
+    let mut obs = vec![Observation::empty(0, 0); 2];
+    for _ in 0..20 {
+        w.observe(&mut obs);
+        let t = w.tick();
+        let mut a = Command::act(0, t);
+        a.v = 1.0; // robot 0 drives into robot 1, which stands still
+        w.step(&[Some(a), Some(Command::act(1, t))]);
+    }
+    let states: Vec<_> = w.robots().iter().map(|r| r.state).collect();
+    assert_eq!(states, vec![RobotState::Down, RobotState::Down]);
+    let events = w.drain_events();
+    assert!(events.iter().any(|e| matches!(e, Event::Collision { robot: 0, other: Some(1), .. })));
+}
+
+#[test]
+fn lidar_measures_known_distances() {
+    let mut w = World::new(&config(&[])).unwrap();
+    let mut obs = vec![Observation::empty(0, 0)];
+    w.observe(&mut obs);
+    let l = obs[0].lidar();
+    assert_eq!(l.len(), 3);
+    // Rays at -90, 0, +90 degrees: wall at y = 0 (2 m), circle surface (3 m), range cap (5 m).
+    assert!((l[0] - 2.0).abs() < 1e-9, "{l:?}");
+    assert!((l[1] - 3.0).abs() < 1e-9, "{l:?}");
+    assert!((l[2] - 5.0).abs() < 1e-9, "{l:?}");
+}
+
+#[test]
+fn lidar_off_reports_nothing_and_costs_nothing() {
+    let mut w = World::new(&config(&[])).unwrap();
+    let mut obs = vec![Observation::empty(0, 0)];
+    w.observe(&mut obs);
+    assert_eq!(w.metrics().lidar_on_ticks, 1, "on at start");
+    w.step(&[Some(Command::act(0, 0))]); // lidar_on = 0
+    w.observe(&mut obs);
+    assert_eq!(obs[0].lidar_len, 0);
+    assert_eq!(w.metrics().lidar_on_ticks, 1);
+}
+
+#[test]
+fn lidar_sees_other_robots() {
+    let cfg = config(&[
+        "robots.count=2",
+        "robots.start={ x = 2.5, y = 6.0, spacing = 2.0, heading_deg = 0.0 }",
+    ]);
+    let mut w = World::new(&cfg).unwrap();
+    let mut obs = vec![Observation::empty(0, 0); 2];
+    w.observe(&mut obs);
+    // Robot 1 is 2 m ahead of robot 0; its body starts 0.2 m earlier.
+    assert!((obs[0].lidar()[1] - 1.8).abs() < 1e-9, "{:?}", obs[0].lidar());
+}
+
+#[test]
+fn range_and_bearing_and_goal_sensor() {
+    let cfg = config(&[
+        "robots.count=2",
+        "robots.start={ x = 2.5, y = 6.0, spacing = 2.0, heading_deg = 90.0 }",
+    ]);
+    let mut w = World::new(&cfg).unwrap();
+    let mut obs = vec![Observation::empty(0, 0); 2];
+    w.observe(&mut obs);
+    let n = obs[0].neighbours();
+    assert_eq!(n.len(), 1);
+    assert_eq!(n[0].id, 1);
+    assert!((n[0].range - 2.0).abs() < 1e-9);
+    // Robot 1 is along +x; robot 0 faces +y, so it is 90 degrees to the right.
+    assert!((n[0].bearing + PI / 2.0).abs() < 1e-9, "{}", n[0].bearing);
+    assert_eq!(obs[0].goal_visible, 1);
+    let (dx, dy) = (9.0 - 1.5, 9.0 - 6.0);
+    assert!((obs[0].goal_range - (dx * dx + dy * dy as f64).sqrt()).abs() < 1e-9);
+    // A narrow forward camera cannot see a goal off to the side.
+    let cfg = config(&["robots.goal_sensor={ range = 100.0, fov_deg = 10.0 }"]);
+    let mut w = World::new(&cfg).unwrap();
+    let mut obs = vec![Observation::empty(0, 0)];
+    w.observe(&mut obs);
+    assert_eq!(obs[0].goal_visible, 0);
+}
+
+#[test]
+fn radio_frames_arrive_with_the_next_observation() {
+    let cfg = config(&["robots.count=2", "robots.start={ x = 2.5, y = 6.0, spacing = 2.0 }"]);
+    let mut w = World::new(&cfg).unwrap();
+    let mut obs = vec![Observation::empty(0, 0); 2];
+    w.observe(&mut obs);
+    let mut a = Command::act(0, 0);
+    a.push_frame(BROADCAST, &RadioMsg::Beacon { x: 1.0, y: 2.0, theta: 3.0 }).unwrap();
+    a.outbox[0].src = 99; // the world never trusts the sender's claim
+    w.step(&[Some(a), Some(Command::act(1, 0))]);
+    w.observe(&mut obs);
+    assert_eq!(obs[1].inbox().len(), 1);
+    assert_eq!(obs[1].inbox()[0].src, 0);
+    assert_eq!(obs[0].inbox().len(), 0, "no echo to the sender");
+    assert_eq!(
+        RadioMsg::decode(obs[1].inbox()[0].bytes()),
+        Some(RadioMsg::Beacon { x: 1.0, y: 2.0, theta: 3.0 })
+    );
+}
+
+#[test]
+fn dead_robot_stays_as_an_obstacle_and_is_not_waited_for() {
+    let cfg = config(&["robots.count=2", "robots.start={ x = 2.5, y = 6.0, spacing = 2.0 }"]);
+    let mut w = World::new(&cfg).unwrap();
+    w.mark_dead(1, "process killed by signal 9");
+    w.mark_dead(1, "again");
+    assert_eq!(w.metrics().dead, 1, "idempotent");
+    assert_eq!(w.robots()[1].state, RobotState::Dead);
+    let mut obs = vec![Observation::empty(0, 0); 2];
+    w.observe(&mut obs);
+    assert!((obs[0].lidar()[1] - 1.8).abs() < 1e-9, "dead body still blocks the lidar");
+    assert_eq!(obs[0].neighbours_len, 0, "a dead robot's emitter is off");
+}
+
+#[test]
+fn same_seed_same_run_with_noise_and_loss() {
+    let run = |seed: u64| {
+        let cfg = config(&[
+            "robots.count=4",
+            "robots.start={ x = 5.0, y = 7.0, spacing = 1.0 }",
+            "robots.noise={ pose = 0.05, heading = 0.02, lidar = 0.05 }",
+            "radio.loss=0.3",
+            &format!("scenario.seed={seed}"),
+        ]);
+        let mut w = World::new(&cfg).unwrap();
+        let mut obs = vec![Observation::empty(0, 0); 4];
+        let mut trace = Vec::new();
+        for _ in 0..50 {
+            w.observe(&mut obs);
+            trace.extend(obs.iter().map(|o| (o.x.to_bits(), o.lidar[0].to_bits(), o.inbox_len)));
+            let cmds: Vec<_> = (0..4)
+                .map(|i| {
+                    let mut c = Command::act(i, w.tick());
+                    c.v = 0.3;
+                    c.omega = 0.5;
+                    c.lidar_on = 1;
+                    c.push_frame(BROADCAST, &RadioMsg::Beacon { x: 0.0, y: 0.0, theta: 0.0 }).unwrap();
+                    Some(c)
+                })
+                .collect();
+            w.step(&cmds);
+        }
+        trace
+    };
+    assert_eq!(run(1), run(1));
+    assert_ne!(run(1), run(2));
+}
