@@ -9,7 +9,10 @@ use std::time::Duration;
 
 /// The workspace root.
 pub fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
 }
 
 /// Directory holding `swarm`, `swarm-world` and `swarm-agent`, built once per test process
@@ -24,8 +27,17 @@ pub fn bin_dir() -> &'static Path {
         let release = profile_dir.file_name().is_some_and(|n| n == "release");
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
         let mut cmd = Command::new(cargo);
-        cmd.current_dir(workspace())
-            .args(["build", "--quiet", "-p", "swarmrt-orchestrator", "-p", "swarmrt-world", "-p", "swarmrt-agent", "--bins"]);
+        cmd.current_dir(workspace()).args([
+            "build",
+            "--quiet",
+            "-p",
+            "swarmrt-orchestrator",
+            "-p",
+            "swarmrt-world",
+            "-p",
+            "swarmrt-agent",
+            "--bins",
+        ]);
         if release {
             cmd.arg("--release");
         }
@@ -107,4 +119,104 @@ pub fn assert_ok(out: &Output) {
         out.status,
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// Live processes whose parent is `parent`, with their command lines (NUL-separated args
+/// turned into spaces).
+pub fn children_of(parent: u32) -> Vec<(i32, String)> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<i32>() else {
+            continue;
+        };
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+            continue;
+        };
+        // Fields after the parenthesised command name: state, ppid, ...
+        let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
+            continue;
+        };
+        let fields: Vec<&str> = rest.split_whitespace().collect();
+        if fields.get(1).and_then(|p| p.parse::<u32>().ok()) == Some(parent) && fields[0] != "Z" {
+            let cmd = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+            let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
+            out.push((pid, cmd));
+        }
+    }
+    out.sort();
+    out
+}
+
+/// True while a process with this pid exists and is not a zombie.
+pub fn alive(pid: i32) -> bool {
+    std::fs::read_to_string(format!("/proc/{pid}/stat"))
+        .ok()
+        .and_then(|s| {
+            s.rsplit_once(')')
+                .map(|(_, r)| r.split_whitespace().next() != Some("Z"))
+        })
+        .unwrap_or(false)
+}
+
+/// Waits until `cond` holds, checking every 20 ms; panics with `what` after `limit`.
+pub fn wait_until(what: &str, limit: Duration, mut cond: impl FnMut() -> bool) {
+    let start = std::time::Instant::now();
+    while !cond() {
+        assert!(start.elapsed() < limit, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Highest tick written to `trajectory.csv` so far (0 if none).
+pub fn last_tick(dir: &Path) -> u64 {
+    std::fs::read_to_string(dir.join("trajectory.csv"))
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .rev()
+                .find_map(|l| l.split(',').next()?.parse::<u64>().ok())
+        })
+        .unwrap_or(0)
+}
+
+/// Starts a long `swarm run` of `configs/goto_simple.toml` into `dir` (extra args appended)
+/// and waits until it has recorded a few ticks, so it is mid-run.
+pub fn start_long_run(dir: &Path, extra: &[&str]) -> std::process::Child {
+    let mut args = vec![
+        "run".to_string(),
+        "configs/goto_simple.toml".to_string(),
+        "--ticks".to_string(),
+        "100000".to_string(),
+        "--set".to_string(),
+        "scenario.stop_when_done=false".to_string(),
+        "--out".to_string(),
+        dir.display().to_string(),
+    ];
+    args.extend(extra.iter().map(|s| s.to_string()));
+    let child = Command::new(swarm_bin())
+        .current_dir(workspace())
+        .args(&args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("swarm starts");
+    wait_until(
+        "the run to record 20 ticks",
+        Duration::from_secs(60),
+        || last_tick(dir) >= 20,
+    );
+    child
+}
+
+/// The run id a running orchestrator gave its children (from their command lines).
+pub fn run_id_of(children: &[(i32, String)]) -> String {
+    children
+        .iter()
+        .find_map(|(_, cmd)| {
+            let mut it = cmd.split_whitespace();
+            it.find(|a| *a == "--run-id")?;
+            it.next().map(str::to_string)
+        })
+        .expect("children carry --run-id")
 }

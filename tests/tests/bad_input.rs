@@ -20,32 +20,55 @@ fn refused(args: &[&str], must_mention: &[&str]) {
 fn unknown_key() {
     let tmp = tempfile::tempdir().unwrap();
     let p = tmp.path().join("typo.toml");
-    let text = std::fs::read_to_string(swarmrt_tests::workspace().join("configs/goto_simple.toml")).unwrap();
+    let text = std::fs::read_to_string(swarmrt_tests::workspace().join("configs/goto_simple.toml"))
+        .unwrap();
     std::fs::write(&p, text.replace("capacity = 4", "capacty = 4")).unwrap();
-    refused(&["check", p.to_str().unwrap()], &["typo.toml", "radio.capacty", "unknown field"]);
+    refused(
+        &["check", p.to_str().unwrap()],
+        &["typo.toml", "radio.capacty", "unknown field"],
+    );
 }
 
 #[test]
 fn wrong_type() {
     refused(
-        &["check", "configs/goto_simple.toml", "--set", "robots.count=\"nine\""],
+        &[
+            "check",
+            "configs/goto_simple.toml",
+            "--set",
+            "robots.count=\"nine\"",
+        ],
         &["goto_simple.toml", "robots.count"],
     );
 }
 
 #[test]
 fn negative_count() {
-    refused(&["run", "configs/goto_simple.toml", "--set", "robots.count=-3"], &["robots.count"]);
+    refused(
+        &[
+            "run",
+            "configs/goto_simple.toml",
+            "--set",
+            "robots.count=-3",
+        ],
+        &["robots.count"],
+    );
 }
 
 #[test]
 fn loss_above_one_names_its_bounds() {
-    refused(&["run", "configs/goto_simple.toml", "--set", "radio.loss=1.5"], &["radio.loss", "[0, 1]"]);
+    refused(
+        &["run", "configs/goto_simple.toml", "--set", "radio.loss=1.5"],
+        &["radio.loss", "[0, 1]"],
+    );
 }
 
 #[test]
 fn missing_file_and_broken_toml() {
-    refused(&["check", "configs/does_not_exist.toml"], &["does_not_exist.toml"]);
+    refused(
+        &["check", "configs/does_not_exist.toml"],
+        &["does_not_exist.toml"],
+    );
     let tmp = tempfile::tempdir().unwrap();
     let p = tmp.path().join("broken.toml");
     std::fs::write(&p, "[scenario\nname = 1").unwrap();
@@ -55,7 +78,12 @@ fn missing_file_and_broken_toml() {
 #[test]
 fn robots_starting_inside_an_obstacle() {
     refused(
-        &["check", "configs/goto_simple.toml", "--set", "robots.start={ x = 5.0, y = 5.5, spacing = 0.7 }"],
+        &[
+            "check",
+            "configs/goto_simple.toml",
+            "--set",
+            "robots.start={ x = 5.0, y = 5.5, spacing = 0.7 }",
+        ],
         &["robots.start"],
     );
 }

@@ -1,7 +1,7 @@
 //! Same config + seed => byte-identical `trajectory.csv` and `events.jsonl`, run after run and
 //! between process mode and `--in-process` (DESIGN section 3).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 use swarmrt_tests::{assert_ok, bytes, metrics, swarm};
 
@@ -9,15 +9,27 @@ const LIMIT: Duration = Duration::from_secs(180);
 
 fn run(tmp: &std::path::Path, name: &str, extra: &[&str]) -> PathBuf {
     let dir = tmp.join(name);
-    let mut args = vec!["run", "configs/goto_simple.toml", "--ticks", "300", "--out", dir.to_str().unwrap()];
+    let mut args = vec![
+        "run",
+        "configs/goto_simple.toml",
+        "--ticks",
+        "300",
+        "--out",
+        dir.to_str().unwrap(),
+    ];
     args.extend_from_slice(extra);
     assert_ok(&swarm(&args, LIMIT));
     dir
 }
 
-fn assert_same(a: &PathBuf, b: &PathBuf) {
+fn assert_same(a: &Path, b: &Path) {
     for f in ["trajectory.csv", "events.jsonl"] {
-        assert!(bytes(a, f) == bytes(b, f), "{f} differs between {} and {}", a.display(), b.display());
+        assert!(
+            bytes(a, f) == bytes(b, f),
+            "{f} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
     }
 }
 
@@ -35,7 +47,16 @@ fn processes_twice_and_in_process_give_identical_bytes() {
 #[test]
 fn lossy_delayed_radio_is_just_as_reproducible() {
     let tmp = tempfile::tempdir().unwrap();
-    let lossy = ["--seed", "4", "--set", "radio.loss=0.3", "--set", "radio.delay_ticks=3", "--set", "radio.jitter_ticks=2"];
+    let lossy = [
+        "--seed",
+        "4",
+        "--set",
+        "radio.loss=0.3",
+        "--set",
+        "radio.delay_ticks=3",
+        "--set",
+        "radio.jitter_ticks=2",
+    ];
     let p1 = run(tmp.path(), "p1", &lossy);
     let p2 = run(tmp.path(), "p2", &lossy);
     let mut ip_args = lossy.to_vec();
@@ -44,7 +65,10 @@ fn lossy_delayed_radio_is_just_as_reproducible() {
     assert_same(&p1, &p2);
     assert_same(&p1, &ip);
     let r = &metrics(&p1)["radio"];
-    assert!(r["dropped_loss"].as_u64().unwrap() > 0, "loss happened: {r}");
+    assert!(
+        r["dropped_loss"].as_u64().unwrap() > 0,
+        "loss happened: {r}"
+    );
     assert_eq!(metrics(&p1)["radio"], metrics(&ip)["radio"]);
 }
 
@@ -52,7 +76,27 @@ fn lossy_delayed_radio_is_just_as_reproducible() {
 fn a_different_seed_gives_a_different_trajectory() {
     let tmp = tempfile::tempdir().unwrap();
     // Noise makes the seed matter even where the behaviour itself draws nothing.
-    let a = run(tmp.path(), "a", &["--seed", "1", "--in-process", "--set", "robots.noise.pose=0.02"]);
-    let b = run(tmp.path(), "b", &["--seed", "2", "--in-process", "--set", "robots.noise.pose=0.02"]);
+    let a = run(
+        tmp.path(),
+        "a",
+        &[
+            "--seed",
+            "1",
+            "--in-process",
+            "--set",
+            "robots.noise.pose=0.02",
+        ],
+    );
+    let b = run(
+        tmp.path(),
+        "b",
+        &[
+            "--seed",
+            "2",
+            "--in-process",
+            "--set",
+            "robots.noise.pose=0.02",
+        ],
+    );
     assert_ne!(bytes(&a, "trajectory.csv"), bytes(&b, "trajectory.csv"));
 }

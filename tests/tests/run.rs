@@ -10,16 +10,33 @@ fn nine_robot_processes_complete_and_write_the_run_directory() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("run");
     let out = swarm(
-        &["run", "configs/goto_simple.toml", "--out", dir.to_str().unwrap()],
+        &[
+            "run",
+            "configs/goto_simple.toml",
+            "--out",
+            dir.to_str().unwrap(),
+        ],
         LIMIT,
     );
     assert_ok(&out);
-    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), dir.to_str().unwrap());
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        dir.to_str().unwrap()
+    );
 
     let m = metrics(&dir);
     for key in [
-        "scenario", "seed", "mode", "agents", "ticks", "reached_target", "collisions", "down",
-        "radio", "lidar_on_ticks", "wall_seconds",
+        "scenario",
+        "seed",
+        "mode",
+        "agents",
+        "ticks",
+        "reached_target",
+        "collisions",
+        "down",
+        "radio",
+        "lidar_on_ticks",
+        "wall_seconds",
     ] {
         assert!(m.get(key).is_some(), "metrics.json lacks {key}: {m}");
     }
@@ -42,13 +59,24 @@ fn nine_robot_processes_complete_and_write_the_run_directory() {
     assert!(csv.starts_with("tick,id,x,y,theta,v,omega,lidar,state\n"));
     assert!(csv.ends_with('\n'));
     let ticks = m["ticks"].as_u64().unwrap() as usize;
-    assert_eq!(csv.lines().count(), 1 + 9 * (ticks + 1), "one row per robot per tick");
-    for line in String::from_utf8(bytes(&dir, "events.jsonl")).unwrap().lines() {
+    assert_eq!(
+        csv.lines().count(),
+        1 + 9 * (ticks + 1),
+        "one row per robot per tick"
+    );
+    for line in String::from_utf8(bytes(&dir, "events.jsonl"))
+        .unwrap()
+        .lines()
+    {
         serde_json::from_str::<serde_json::Value>(line).expect("each event line is JSON");
     }
     let config = String::from_utf8(bytes(&dir, "config.toml")).unwrap();
     assert!(config.contains("seed = 1"));
-    assert!(String::from_utf8(bytes(&dir, "trajectory.svg")).unwrap().contains("<svg"));
+    assert!(
+        String::from_utf8(bytes(&dir, "trajectory.svg"))
+            .unwrap()
+            .contains("<svg")
+    );
     assert_eq!(&bytes(&dir, "trajectory.png")[..4], b"\x89PNG");
 
     // Nothing of the run is left in shared memory or the iceoryx2 root.
@@ -62,12 +90,28 @@ fn the_resolved_config_reproduces_the_run() {
     let a = tmp.path().join("a");
     let b = tmp.path().join("b");
     assert_ok(&swarm(
-        &["run", "configs/goto_simple.toml", "--in-process", "--seed", "5", "--set", "radio.loss=0.2", "--out", a.to_str().unwrap()],
+        &[
+            "run",
+            "configs/goto_simple.toml",
+            "--in-process",
+            "--seed",
+            "5",
+            "--set",
+            "radio.loss=0.2",
+            "--out",
+            a.to_str().unwrap(),
+        ],
         LIMIT,
     ));
     let resolved = a.join("config.toml");
     assert_ok(&swarm(
-        &["run", resolved.to_str().unwrap(), "--in-process", "--out", b.to_str().unwrap()],
+        &[
+            "run",
+            resolved.to_str().unwrap(),
+            "--in-process",
+            "--out",
+            b.to_str().unwrap(),
+        ],
         LIMIT,
     ));
     assert_eq!(bytes(&a, "trajectory.csv"), bytes(&b, "trajectory.csv"));

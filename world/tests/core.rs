@@ -3,7 +3,7 @@
 
 use std::f64::consts::PI;
 use swarmrt_protocol::config::Config;
-use swarmrt_protocol::{Command, MAX_OUTBOX, Observation, RadioMsg, RobotState, BROADCAST};
+use swarmrt_protocol::{BROADCAST, Command, MAX_OUTBOX, Observation, RadioMsg, RobotState};
 use swarmrt_world::{Event, World};
 
 /// One robot at (2, 2) facing +x, a circle at (6, 2), walls at 0 and 10.
@@ -53,13 +53,19 @@ fn unicycle_moves_straight_and_turns() {
     let mut w = World::new(&config(&[])).unwrap();
     drive(&mut w, 1.0, 0.0, 10);
     let r = &w.robots()[0];
-    assert!((r.x - 3.0).abs() < 1e-9 && (r.y - 2.0).abs() < 1e-9, "{r:?}");
+    assert!(
+        (r.x - 3.0).abs() < 1e-9 && (r.y - 2.0).abs() < 1e-9,
+        "{r:?}"
+    );
     // A quarter turn at pi/2 rad/s over 1 s, standing still.
     drive(&mut w, 0.0, PI / 2.0, 10);
     assert!((w.robots()[0].theta - PI / 2.0).abs() < 1e-9);
     drive(&mut w, 1.0, 0.0, 10);
     let r = &w.robots()[0];
-    assert!((r.x - 3.0).abs() < 1e-9 && (r.y - 3.0).abs() < 1e-9, "{r:?}");
+    assert!(
+        (r.x - 3.0).abs() < 1e-9 && (r.y - 3.0).abs() < 1e-9,
+        "{r:?}"
+    );
 }
 
 #[test]
@@ -69,7 +75,11 @@ fn out_of_range_speed_is_rejected_not_clamped() {
     assert_eq!(w.robots()[0].x, 2.0, "a refused command means stop");
     assert_eq!(w.metrics().rejected, 3);
     let events = w.drain_events();
-    assert_eq!(events.len(), 1, "logged once per robot and reason: {events:?}");
+    assert_eq!(
+        events.len(),
+        1,
+        "logged once per robot and reason: {events:?}"
+    );
     assert!(matches!(&events[0], Event::Rejected { reason, .. } if reason == "speed out of range"));
 }
 
@@ -91,13 +101,32 @@ fn nan_wrong_version_wrong_tick_and_bad_frames_are_rejected() {
     c.outbox_len = MAX_OUTBOX as u16 + 1;
     assert!(w.validate(0, &c).is_err());
     let mut c = good;
-    c.push_frame(BROADCAST, &RadioMsg::Beacon { x: 0.0, y: 0.0, theta: 0.0 }).unwrap();
+    c.push_frame(
+        BROADCAST,
+        &RadioMsg::Beacon {
+            x: 0.0,
+            y: 0.0,
+            theta: 0.0,
+        },
+    )
+    .unwrap();
     c.outbox[0].len = 500;
     assert_eq!(w.validate(0, &c), Err("oversized radio frame"));
     let mut c = good;
-    c.push_frame(42, &RadioMsg::Beacon { x: 0.0, y: 0.0, theta: 0.0 }).unwrap();
+    c.push_frame(
+        42,
+        &RadioMsg::Beacon {
+            x: 0.0,
+            y: 0.0,
+            theta: 0.0,
+        },
+    )
+    .unwrap();
     assert_eq!(w.validate(0, &c), Err("radio frame to an unknown robot"));
-    assert_eq!(w.validate(1, &good), Err("robot id does not match its slot"));
+    assert_eq!(
+        w.validate(1, &good),
+        Err("robot id does not match its slot")
+    );
 }
 
 #[test]
@@ -107,7 +136,11 @@ fn hitting_an_obstacle_knocks_the_robot_down_where_it_stands() {
     drive(&mut w, 2.0, 0.0, 30);
     let r = w.robots()[0].clone();
     assert_eq!(r.state, RobotState::Down);
-    assert!(r.x < 4.8 + 1e-9 && r.x > 4.5, "stopped at the obstacle, not inside: {}", r.x);
+    assert!(
+        r.x < 4.8 + 1e-9 && r.x > 4.5,
+        "stopped at the obstacle, not inside: {}",
+        r.x
+    );
     assert_eq!(w.metrics().collisions, 1);
     assert_eq!(w.metrics().down, 1);
     let x = r.x;
@@ -119,12 +152,14 @@ fn hitting_an_obstacle_knocks_the_robot_down_where_it_stands() {
 fn fast_robot_does_not_tunnel_through_a_thin_wall() {
     let mut cfg = config(&["robots.max_speed=100.0"]);
     cfg.map.circles.clear();
-    cfg.map.rectangles.push(swarmrt_protocol::config::RectObstacle {
-        x_min: 4.0,
-        y_min: 0.5,
-        x_max: 4.05,
-        y_max: 3.5,
-    });
+    cfg.map
+        .rectangles
+        .push(swarmrt_protocol::config::RectObstacle {
+            x_min: 4.0,
+            y_min: 0.5,
+            x_max: 4.05,
+            y_max: 3.5,
+        });
     let mut w = World::new(&cfg).unwrap();
     drive(&mut w, 50.0, 0.0, 1); // 5 m in one tick
     assert_eq!(w.robots()[0].state, RobotState::Down);
@@ -149,7 +184,14 @@ fn robots_colliding_both_go_down() {
     let states: Vec<_> = w.robots().iter().map(|r| r.state).collect();
     assert_eq!(states, vec![RobotState::Down, RobotState::Down]);
     let events = w.drain_events();
-    assert!(events.iter().any(|e| matches!(e, Event::Collision { robot: 0, other: Some(1), .. })));
+    assert!(events.iter().any(|e| matches!(
+        e,
+        Event::Collision {
+            robot: 0,
+            other: Some(1),
+            ..
+        }
+    )));
 }
 
 #[test]
@@ -187,7 +229,11 @@ fn lidar_sees_other_robots() {
     let mut obs = vec![Observation::empty(0, 0); 2];
     w.observe(&mut obs);
     // Robot 1 is 2 m ahead of robot 0; its body starts 0.2 m earlier.
-    assert!((obs[0].lidar()[1] - 1.8).abs() < 1e-9, "{:?}", obs[0].lidar());
+    assert!(
+        (obs[0].lidar()[1] - 1.8).abs() < 1e-9,
+        "{:?}",
+        obs[0].lidar()
+    );
 }
 
 #[test]
@@ -218,12 +264,23 @@ fn range_and_bearing_and_goal_sensor() {
 
 #[test]
 fn radio_frames_arrive_with_the_next_observation() {
-    let cfg = config(&["robots.count=2", "robots.start={ x = 2.5, y = 6.0, spacing = 2.0 }"]);
+    let cfg = config(&[
+        "robots.count=2",
+        "robots.start={ x = 2.5, y = 6.0, spacing = 2.0 }",
+    ]);
     let mut w = World::new(&cfg).unwrap();
     let mut obs = vec![Observation::empty(0, 0); 2];
     w.observe(&mut obs);
     let mut a = Command::act(0, 0);
-    a.push_frame(BROADCAST, &RadioMsg::Beacon { x: 1.0, y: 2.0, theta: 3.0 }).unwrap();
+    a.push_frame(
+        BROADCAST,
+        &RadioMsg::Beacon {
+            x: 1.0,
+            y: 2.0,
+            theta: 3.0,
+        },
+    )
+    .unwrap();
     a.outbox[0].src = 99; // the world never trusts the sender's claim
     w.step(&[Some(a), Some(Command::act(1, 0))]);
     w.observe(&mut obs);
@@ -232,13 +289,20 @@ fn radio_frames_arrive_with_the_next_observation() {
     assert_eq!(obs[0].inbox().len(), 0, "no echo to the sender");
     assert_eq!(
         RadioMsg::decode(obs[1].inbox()[0].bytes()),
-        Some(RadioMsg::Beacon { x: 1.0, y: 2.0, theta: 3.0 })
+        Some(RadioMsg::Beacon {
+            x: 1.0,
+            y: 2.0,
+            theta: 3.0
+        })
     );
 }
 
 #[test]
 fn dead_robot_stays_as_an_obstacle_and_is_not_waited_for() {
-    let cfg = config(&["robots.count=2", "robots.start={ x = 2.5, y = 6.0, spacing = 2.0 }"]);
+    let cfg = config(&[
+        "robots.count=2",
+        "robots.start={ x = 2.5, y = 6.0, spacing = 2.0 }",
+    ]);
     let mut w = World::new(&cfg).unwrap();
     w.mark_dead(1, "process killed by signal 9");
     w.mark_dead(1, "again");
@@ -246,7 +310,10 @@ fn dead_robot_stays_as_an_obstacle_and_is_not_waited_for() {
     assert_eq!(w.robots()[1].state, RobotState::Dead);
     let mut obs = vec![Observation::empty(0, 0); 2];
     w.observe(&mut obs);
-    assert!((obs[0].lidar()[1] - 1.8).abs() < 1e-9, "dead body still blocks the lidar");
+    assert!(
+        (obs[0].lidar()[1] - 1.8).abs() < 1e-9,
+        "dead body still blocks the lidar"
+    );
     assert_eq!(obs[0].neighbours_len, 0, "a dead robot's emitter is off");
 }
 
@@ -265,14 +332,25 @@ fn same_seed_same_run_with_noise_and_loss() {
         let mut trace = Vec::new();
         for _ in 0..50 {
             w.observe(&mut obs);
-            trace.extend(obs.iter().map(|o| (o.x.to_bits(), o.lidar[0].to_bits(), o.inbox_len)));
+            trace.extend(
+                obs.iter()
+                    .map(|o| (o.x.to_bits(), o.lidar[0].to_bits(), o.inbox_len)),
+            );
             let cmds: Vec<_> = (0..4)
                 .map(|i| {
                     let mut c = Command::act(i, w.tick());
                     c.v = 0.3;
                     c.omega = 0.5;
                     c.lidar_on = 1;
-                    c.push_frame(BROADCAST, &RadioMsg::Beacon { x: 0.0, y: 0.0, theta: 0.0 }).unwrap();
+                    c.push_frame(
+                        BROADCAST,
+                        &RadioMsg::Beacon {
+                            x: 0.0,
+                            y: 0.0,
+                            theta: 0.0,
+                        },
+                    )
+                    .unwrap();
                     Some(c)
                 })
                 .collect();

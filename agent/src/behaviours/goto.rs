@@ -73,7 +73,8 @@ impl Behaviour for Goto {
         let mut cmd = Command::act(self.id, obs.tick);
         cmd.lidar_on = 1;
         let p = self.params;
-        if p.beacon_period > 0 && (obs.tick + self.id as u64).is_multiple_of(p.beacon_period as u64) {
+        if p.beacon_period > 0 && (obs.tick + self.id as u64).is_multiple_of(p.beacon_period as u64)
+        {
             let beacon = RadioMsg::Beacon {
                 x: obs.x,
                 y: obs.y,
@@ -113,7 +114,8 @@ impl Behaviour for Goto {
             }
         }
         let goal = self.goal;
-        let in_goal_area = ((obs.x - goal.0).powi(2) + (obs.y - goal.1).powi(2)).sqrt() < self.goal_radius * 0.9;
+        let in_goal_area =
+            ((obs.x - goal.0).powi(2) + (obs.y - goal.1).powi(2)).sqrt() < self.goal_radius * 0.9;
         // Only obstacles closer than the slot matter.
         if nearest < p.avoid_distance && nearest < dist {
             if in_goal_area {
@@ -126,15 +128,17 @@ impl Behaviour for Goto {
             let side = *self
                 .avoid_side
                 .get_or_insert(if left >= right { 1.0 } else { -1.0 });
-            let urgency = 1.0
-                - (nearest - self.radius).max(0.0) / (p.avoid_distance - self.radius).max(1e-6);
+            let urgency =
+                1.0 - (nearest - self.radius).max(0.0) / (p.avoid_distance - self.radius).max(1e-6);
             omega = side * self.max_turn * urgency.clamp(0.3, 1.0);
             v = p.speed * (1.0 - urgency).clamp(0.0, 1.0);
             if nearest < self.radius + 0.1 {
                 v = 0.0;
             }
         } else if let Some(side) = self.avoid_side {
-            if toward_slot < p.avoid_distance.max(dist.min(1.5 * p.avoid_distance)) && best < AHEAD * 2.0 {
+            if toward_slot < p.avoid_distance.max(dist.min(1.5 * p.avoid_distance))
+                && best < AHEAD * 2.0
+            {
                 // The slot is still behind the obstacle: follow its edge, bending back
                 // toward it slowly so the robot goes around instead of away.
                 omega = -side * 0.3 * self.max_turn;
