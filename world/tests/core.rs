@@ -253,7 +253,7 @@ fn range_and_bearing_and_goal_sensor() {
     assert!((n[0].bearing + PI / 2.0).abs() < 1e-9, "{}", n[0].bearing);
     assert_eq!(obs[0].goal_visible, 1);
     let (dx, dy) = (9.0 - 1.5, 9.0 - 6.0);
-    assert!((obs[0].goal_range - (dx * dx + dy * dy as f64).sqrt()).abs() < 1e-9);
+    assert!((obs[0].goal_range - (dx * dx + dy * dy).sqrt()).abs() < 1e-9);
     // A narrow forward camera cannot see a goal off to the side.
     let cfg = config(&["robots.goal_sensor={ range = 100.0, fov_deg = 10.0 }"]);
     let mut w = World::new(&cfg).unwrap();
