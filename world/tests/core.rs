@@ -252,7 +252,7 @@ fn range_and_bearing_and_goal_sensor() {
     // Robot 1 is along +x; robot 0 faces +y, so it is 90 degrees to the right.
     assert!((n[0].bearing + PI / 2.0).abs() < 1e-9, "{}", n[0].bearing);
     assert_eq!(obs[0].goal_visible, 1);
-    let (dx, dy) = (9.0 - 1.5, 9.0 - 6.0);
+    let (dx, dy): (f64, f64) = (9.0 - 1.5, 9.0 - 6.0);
     assert!((obs[0].goal_range - (dx * dx + dy * dy).sqrt()).abs() < 1e-9);
     // A narrow forward camera cannot see a goal off to the side.
     let cfg = config(&["robots.goal_sensor={ range = 100.0, fov_deg = 10.0 }"]);
