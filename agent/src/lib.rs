@@ -27,6 +27,7 @@
 
 pub mod agent;
 pub mod behaviours;
+pub mod cli;
 pub mod shell;
 
 pub use agent::{Agent, Decoded};

@@ -33,6 +33,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod cli;
 pub mod grid;
 pub mod map;
 pub mod radio;

@@ -1,26 +1,28 @@
-//! `swarm-world`: the world process of one run. Started by `swarm run`, not by hand.
+//! Command line of the `swarm-agent` process: one robot process. Started by `swarm run`, not by hand.
 
+use crate::shell;
 use clap::Parser;
 use swarmrt_protocol::config::Config;
 use swarmrt_protocol::services::{RunServices, valid_run_id};
-use swarmrt_world::shell;
 
-/// The world process of a swarmrt run.
+/// One robot of a swarmrt run.
 #[derive(Parser, Debug)]
+#[command(name = "swarm-agent")]
 #[command(version, about)]
 struct Args {
     /// Run id (lower-case hex) naming the run's iceoryx2 services.
     #[arg(long)]
     run_id: String,
+    /// The robot id, 0..robots.count.
+    #[arg(long)]
+    robot: u32,
     /// The resolved config of the run.
     #[arg(long)]
     config: std::path::PathBuf,
-    /// The run directory to write trajectory.csv and events.jsonl into.
-    #[arg(long)]
-    out: std::path::PathBuf,
 }
 
-fn main() -> std::process::ExitCode {
+/// Entry point of the process (the `swarm-agent` binary in the orchestrator package).
+pub fn main() -> std::process::ExitCode {
     let args = Args::parse();
     tracing_subscriber::fmt()
         .with_env_filter(
@@ -29,7 +31,7 @@ fn main() -> std::process::ExitCode {
         )
         .with_writer(std::io::stderr)
         .init();
-    let span = tracing::info_span!("world", run_id = %args.run_id);
+    let span = tracing::info_span!("robot", agent_id = args.robot);
     let _enter = span.enter();
     if !valid_run_id(&args.run_id) {
         tracing::error!(run_id = %args.run_id, "invalid run id");
@@ -42,10 +44,18 @@ fn main() -> std::process::ExitCode {
             return std::process::ExitCode::from(2);
         }
     };
-    match shell::run(&RunServices::new(&args.run_id), &cfg, &args.out) {
-        Ok(()) => std::process::ExitCode::SUCCESS,
+    if args.robot >= cfg.robots.count {
+        tracing::error!(robots = cfg.robots.count, "robot id out of range");
+        return std::process::ExitCode::from(2);
+    }
+    let run = RunServices::new(&args.run_id);
+    match shell::run(&run, &cfg, args.robot) {
+        // Exit code 0 means exactly "the world ended the run", so the orchestrator can tell a
+        // clean end from a robot that vanished mid-run.
+        Ok(shell::Exit::Shutdown) => std::process::ExitCode::SUCCESS,
+        Ok(shell::Exit::Terminated) => std::process::ExitCode::from(143),
         Err(e) => {
-            tracing::error!("world failed: {e}");
+            tracing::error!("robot failed: {e}");
             std::process::ExitCode::from(1)
         }
     }
