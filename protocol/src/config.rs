@@ -654,16 +654,6 @@ impl Config {
             }
         }
 
-        for (i, (x, y)) in self.start_positions().iter().enumerate() {
-            check(
-                self.inside_bounds(*x, *y, r.radius),
-                "robots.start",
-                &format!(
-                    "every start position inside map.bounds; robot {i} would start at ({x:.2}, {y:.2}) with robots.count = {}",
-                    r.count
-                ),
-            )?;
-        }
         Ok(())
     }
 
@@ -672,13 +662,19 @@ impl Config {
         x - margin > b[0] && x + margin < b[2] && y - margin > b[1] && y + margin < b[3]
     }
 
-    /// Start positions, a near-square grid centred on `robots.start`, row by row in id order.
-    pub fn start_positions(&self) -> Vec<(f64, f64)> {
-        grid_around(
-            self.robots.count as usize,
-            self.robots.start.x,
-            self.robots.start.y,
-            self.robots.start.spacing,
+    /// Start positions: the `robots.count` points of a square grid of `start.spacing` nearest
+    /// to `start.(x, y)` that lie inside the bounds and satisfy `clear` (the world passes its
+    /// obstacle clearance), so any count that fits the map gives a valid layout. `None` when
+    /// the map has no room for that many.
+    pub fn start_positions(&self, clear: impl Fn(f64, f64) -> bool) -> Option<Vec<(f64, f64)>> {
+        let r = &self.robots;
+        nearest_grid_points(
+            r.count as usize,
+            (r.start.x, r.start.y),
+            r.start.spacing,
+            self.map.bounds,
+            r.radius,
+            clear,
         )
     }
 
@@ -688,20 +684,60 @@ impl Config {
     }
 }
 
-/// `n` points on a near-square grid of `spacing` centred on (`cx`, `cy`), in row order.
-pub fn grid_around(n: usize, cx: f64, cy: f64, spacing: f64) -> Vec<(f64, f64)> {
-    let cols = (n as f64).sqrt().ceil().max(1.0) as usize;
-    let rows = n.div_ceil(cols);
-    let x0 = cx - spacing * (cols as f64 - 1.0) / 2.0;
-    let y0 = cy - spacing * (rows as f64 - 1.0) / 2.0;
-    (0..n)
-        .map(|i| {
-            (
-                x0 + spacing * (i % cols) as f64,
-                y0 + spacing * (i / cols) as f64,
-            )
-        })
-        .collect()
+/// Most grid candidates [`nearest_grid_points`] will consider (bounds a huge map with a tiny
+/// spacing).
+const MAX_GRID_CANDIDATES: i64 = 4_000_000;
+
+/// The `n` points of a square grid of `spacing` through `centre` that are nearest to `centre`,
+/// at least `margin` inside `bounds` and accepted by `ok`; ordered by grid distance, then row,
+/// then column (integer keys, so the order is exact). `None` if fewer than `n` qualify.
+pub fn nearest_grid_points(
+    n: usize,
+    centre: (f64, f64),
+    spacing: f64,
+    bounds: [f64; 4],
+    margin: f64,
+    ok: impl Fn(f64, f64) -> bool,
+) -> Option<Vec<(f64, f64)>> {
+    if n == 0 {
+        return Some(Vec::new());
+    }
+    if !spacing.is_finite() || spacing <= 0.0 {
+        return None;
+    }
+    let lo_i = ((bounds[0] + margin - centre.0) / spacing).ceil() as i64;
+    let hi_i = ((bounds[2] - margin - centre.0) / spacing).floor() as i64;
+    let lo_j = ((bounds[1] + margin - centre.1) / spacing).ceil() as i64;
+    let hi_j = ((bounds[3] - margin - centre.1) / spacing).floor() as i64;
+    if hi_i < lo_i || hi_j < lo_j {
+        return None;
+    }
+    if (hi_i - lo_i + 1).saturating_mul(hi_j - lo_j + 1) > MAX_GRID_CANDIDATES {
+        return None;
+    }
+    let mut cells: Vec<(i64, i64, i64)> = Vec::new();
+    for j in lo_j..=hi_j {
+        for i in lo_i..=hi_i {
+            cells.push((i * i + j * j, j, i));
+        }
+    }
+    cells.sort_unstable();
+    let mut out = Vec::with_capacity(n);
+    for (_, j, i) in cells {
+        let (x, y) = (centre.0 + spacing * i as f64, centre.1 + spacing * j as f64);
+        if x - margin > bounds[0]
+            && x + margin < bounds[2]
+            && y - margin > bounds[1]
+            && y + margin < bounds[3]
+            && ok(x, y)
+        {
+            out.push((x, y));
+            if out.len() == n {
+                return Some(out);
+            }
+        }
+    }
+    None
 }
 
 fn one_line(s: &str) -> String {
@@ -798,7 +834,7 @@ count = 4
         let c = load(MINIMAL, &[]).unwrap();
         assert_eq!(c.scenario.dt, 0.1);
         assert_eq!(c.radio.capacity, 4);
-        assert_eq!(c.start_positions().len(), 4);
+        assert_eq!(c.start_positions(|_, _| true).unwrap().len(), 4);
         assert!(matches!(c.behaviour, BehaviourConfig::Goto(_)));
     }
 
@@ -843,14 +879,45 @@ count = 4
     }
 
     #[test]
-    fn too_many_robots_for_the_map_is_refused() {
-        let e = load(MINIMAL, &["robots.count=400"]).unwrap_err();
-        assert_eq!(e.key, "robots.start", "{e}");
+    fn grid_points_nearest_first_inside_bounds_and_clear() {
+        let all = |_: f64, _: f64| true;
+        let g =
+            nearest_grid_points(5, (0.0, 0.0), 1.0, [-10.0, -10.0, 10.0, 10.0], 0.1, all).unwrap();
+        assert_eq!(
+            g,
+            vec![(0.0, -1.0), (-1.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
+                .into_iter()
+                .fold(vec![(0.0, 0.0)], |mut v, p| {
+                    v.push(p);
+                    v
+                })
+        );
+        // Near a wall the layout grows away from it instead of leaving the map.
+        let g = nearest_grid_points(9, (0.5, 0.5), 1.0, [0.0, 0.0, 10.0, 10.0], 0.2, all).unwrap();
+        assert!(g.iter().all(|&(x, y)| x > 0.2 && y > 0.2), "{g:?}");
+        // Points refused by `ok` are skipped.
+        let g = nearest_grid_points(
+            3,
+            (0.0, 0.0),
+            1.0,
+            [-10.0, -10.0, 10.0, 10.0],
+            0.1,
+            |x, _| x >= 0.0,
+        )
+        .unwrap();
+        assert!(g.iter().all(|&(x, _)| x >= 0.0), "{g:?}");
+        // No room: None.
+        assert_eq!(
+            nearest_grid_points(200, (1.0, 1.0), 1.0, [0.0, 0.0, 5.0, 5.0], 0.1, all),
+            None
+        );
     }
 
     #[test]
-    fn grid_is_centred() {
-        let g = grid_around(4, 0.0, 0.0, 1.0);
-        assert_eq!(g, vec![(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)]);
+    fn too_many_robots_for_the_map_is_refused() {
+        let c = load(MINIMAL, &["robots.count=400"]).unwrap();
+        assert_eq!(c.start_positions(|_, _| true), None);
+        let c = load(MINIMAL, &["robots.count=100"]).unwrap();
+        assert_eq!(c.start_positions(|_, _| true).unwrap().len(), 100);
     }
 }

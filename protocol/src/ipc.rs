@@ -65,6 +65,12 @@ pub type CommandService =
 /// An event service handle.
 pub type EventService = iceoryx2::service::port_factory::event::PortFactory<Svc>;
 
+/// Observation samples the world's publisher preallocates. iceoryx2's worst case is about
+/// subscribers x (buffer + borrowed), i.e. ~2N samples of ~6 KB x N each: over 1 GB of shared
+/// memory at 200 robots. In lock-step at most one sample is queued or held per robot, and
+/// the world reclaims a dead robot's samples by cleaning up its node, so a few suffice.
+pub const OBSERVATION_SAMPLES: usize = 16;
+
 /// Services of a run, as the world creates them (sized from the robot count).
 pub struct WorldServices {
     /// World -> robots samples.
@@ -92,8 +98,8 @@ pub fn create_services(
         .max_publishers(1)
         .max_subscribers(n)
         .max_nodes(n + 2)
-        .subscriber_max_buffer_size(2)
-        .subscriber_max_borrowed_samples(2)
+        .subscriber_max_buffer_size(1)
+        .subscriber_max_borrowed_samples(1)
         .history_size(0)
         .enable_safe_overflow(true)
         .create()?;
@@ -110,8 +116,8 @@ pub fn create_services(
         .max_publishers(n)
         .max_subscribers(1)
         .max_nodes(n + 2)
-        .subscriber_max_buffer_size(4)
-        .subscriber_max_borrowed_samples(4)
+        .subscriber_max_buffer_size(2)
+        .subscriber_max_borrowed_samples(1)
         .history_size(0)
         .enable_safe_overflow(true)
         .create()?;

@@ -76,14 +76,14 @@ fn missing_file_and_broken_toml() {
 }
 
 #[test]
-fn robots_starting_inside_an_obstacle() {
+fn more_robots_than_the_map_has_room_for() {
     refused(
         &[
-            "check",
+            "run",
             "configs/goto_simple.toml",
             "--set",
-            "robots.start={ x = 5.0, y = 5.5, spacing = 0.7 }",
+            "robots.count=5000",
         ],
-        &["robots.start"],
+        &["robots.start", "5000"],
     );
 }

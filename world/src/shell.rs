@@ -96,6 +96,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
         .observations
         .publisher_builder()
         .initial_max_slice_len(n)
+        .override_sample_preallocation(|_| ipc::OBSERVATION_SAMPLES)
         .create()?;
     let obs_notifier = services.observations_event.notifier_builder().create()?;
     let subscriber = services.commands.subscriber_builder().create()?;
@@ -119,7 +120,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
                 tracing::debug!(robot = c.robot, pid = c.pid, "robot ready");
             }
         }
-        interrupted |= drain_control(&control, &mut world, &mut waiting)?;
+        interrupted |= drain_control(&control, &node, &mut world, &mut waiting)?;
         if waiting.is_empty() || interrupted {
             break;
         }
@@ -187,7 +188,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
                     commands[id] = Some(c);
                 }
             }
-            interrupted |= drain_control(&control, &mut world, &mut waiting)?;
+            interrupted |= drain_control(&control, &node, &mut world, &mut waiting)?;
             if waiting.is_empty() || interrupted {
                 break;
             }
@@ -244,6 +245,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
 /// Applies pending control messages; returns true when the run must stop.
 fn drain_control(
     control: &Receiver<Control>,
+    node: &Node<ipc::Svc>,
     world: &mut World,
     waiting: &mut BTreeSet<u32>,
 ) -> Result<bool, IpcError> {
@@ -253,6 +255,10 @@ fn drain_control(
             Ok(Control::RobotDied { robot, reason }) => {
                 world.mark_dead(robot, &reason);
                 waiting.remove(&robot);
+                // The orchestrator has reaped it, so iceoryx2 sees its node as dead: drop its
+                // ports, returning the observation samples its queue still held.
+                let cleaned = node.try_cleanup_dead_nodes();
+                tracing::debug!(robot, ?cleaned, "dead robot's node cleaned up");
             }
             Ok(Control::Stop) => stop = true,
             Err(TryRecvError::Empty) => return Ok(stop),

@@ -133,8 +133,18 @@ impl World {
         let map = Map::build(&cfg.map)?;
         let seed = cfg.scenario.seed;
         let heading = wrap_angle(cfg.start_heading());
-        let robots: Vec<Robot> = cfg
-            .start_positions()
+        let radius = cfg.robots.radius;
+        let starts = cfg
+            .start_positions(|x, y| map.clearance((x, y)) >= radius * 1.5)
+            .ok_or_else(|| MapError {
+                key: "robots.start".to_string(),
+                message: format!(
+                    "expected room for {} robots {} m apart near ({}, {}), inside map.bounds and clear of obstacles; \
+                     the map has less (lower robots.count or robots.start.spacing, or move robots.start)",
+                    cfg.robots.count, cfg.robots.start.spacing, cfg.robots.start.x, cfg.robots.start.y
+                ),
+            })?;
+        let robots: Vec<Robot> = starts
             .into_iter()
             .enumerate()
             .map(|(i, (x, y))| Robot {
@@ -150,17 +160,6 @@ impl World {
             })
             .collect();
         let n = robots.len();
-        for (i, r) in robots.iter().enumerate() {
-            if map.clearance((r.x, r.y)) < cfg.robots.radius {
-                return Err(MapError {
-                    key: "robots.start".to_string(),
-                    message: format!(
-                        "robot {i} would start inside an obstacle at ({:.2}, {:.2})",
-                        r.x, r.y
-                    ),
-                });
-            }
-        }
         let mut world = World {
             cfg: cfg.clone(),
             map,

@@ -170,9 +170,14 @@ fn fast_robot_does_not_tunnel_through_a_thin_wall() {
 fn robots_colliding_both_go_down() {
     let cfg = config(&[
         "robots.count=2",
-        "robots.start={ x = 2.5, y = 6.0, spacing = 1.0, heading_deg = 0.0 }",
+        "robots.start={ x = 2.5, y = 6.0, spacing = 1.0, heading_deg = -90.0 }",
     ]);
     let mut w = World::new(&cfg).unwrap();
+    assert_eq!(
+        (w.robots()[1].x, w.robots()[1].y),
+        (2.5, 5.0),
+        "robot 1 starts 1 m south"
+    );
     let mut obs = vec![Observation::empty(0, 0); 2];
     for _ in 0..20 {
         w.observe(&mut obs);
@@ -223,12 +228,12 @@ fn lidar_off_reports_nothing_and_costs_nothing() {
 fn lidar_sees_other_robots() {
     let cfg = config(&[
         "robots.count=2",
-        "robots.start={ x = 2.5, y = 6.0, spacing = 2.0, heading_deg = 0.0 }",
+        "robots.start={ x = 2.5, y = 6.0, spacing = 2.0, heading_deg = -90.0 }",
     ]);
     let mut w = World::new(&cfg).unwrap();
     let mut obs = vec![Observation::empty(0, 0); 2];
     w.observe(&mut obs);
-    // Robot 1 is 2 m ahead of robot 0; its body starts 0.2 m earlier.
+    // Robot 1 is 2 m ahead (south) of robot 0; its body starts 0.2 m earlier.
     assert!(
         (obs[0].lidar()[1] - 1.8).abs() < 1e-9,
         "{:?}",
@@ -240,7 +245,7 @@ fn lidar_sees_other_robots() {
 fn range_and_bearing_and_goal_sensor() {
     let cfg = config(&[
         "robots.count=2",
-        "robots.start={ x = 2.5, y = 6.0, spacing = 2.0, heading_deg = 90.0 }",
+        "robots.start={ x = 2.5, y = 6.0, spacing = 2.0, heading_deg = 0.0 }",
     ]);
     let mut w = World::new(&cfg).unwrap();
     let mut obs = vec![Observation::empty(0, 0); 2];
@@ -249,10 +254,10 @@ fn range_and_bearing_and_goal_sensor() {
     assert_eq!(n.len(), 1);
     assert_eq!(n[0].id, 1);
     assert!((n[0].range - 2.0).abs() < 1e-9);
-    // Robot 1 is along +x; robot 0 faces +y, so it is 90 degrees to the right.
+    // Robot 1 is 2 m south; robot 0 faces +x, so it is 90 degrees to the right.
     assert!((n[0].bearing + PI / 2.0).abs() < 1e-9, "{}", n[0].bearing);
     assert_eq!(obs[0].goal_visible, 1);
-    let (dx, dy): (f64, f64) = (9.0 - 1.5, 9.0 - 6.0);
+    let (dx, dy): (f64, f64) = (9.0 - 2.5, 9.0 - 6.0);
     assert!((obs[0].goal_range - (dx * dx + dy * dy).sqrt()).abs() < 1e-9);
     // A narrow forward camera cannot see a goal off to the side.
     let cfg = config(&["robots.goal_sensor={ range = 100.0, fov_deg = 10.0 }"]);
@@ -301,7 +306,7 @@ fn radio_frames_arrive_with_the_next_observation() {
 fn dead_robot_stays_as_an_obstacle_and_is_not_waited_for() {
     let cfg = config(&[
         "robots.count=2",
-        "robots.start={ x = 2.5, y = 6.0, spacing = 2.0 }",
+        "robots.start={ x = 2.5, y = 6.0, spacing = 2.0, heading_deg = -90.0 }",
     ]);
     let mut w = World::new(&cfg).unwrap();
     w.mark_dead(1, "process killed by signal 9");
@@ -360,4 +365,26 @@ fn same_seed_same_run_with_noise_and_loss() {
     };
     assert_eq!(run(1), run(1));
     assert_ne!(run(1), run(2));
+}
+
+#[test]
+fn start_layout_follows_the_count_and_avoids_obstacles() {
+    // Centred on the circle obstacle: robots start around it, never inside, never overlapping.
+    let cfg = config(&[
+        "robots.count=60",
+        "robots.start={ x = 6.0, y = 2.0, spacing = 0.5 }",
+    ]);
+    let w = World::new(&cfg).unwrap();
+    let r = w.robots();
+    assert_eq!(r.len(), 60);
+    for a in r {
+        assert!(
+            w.map().clearance((a.x, a.y)) >= 0.2,
+            "robot {} starts in an obstacle",
+            a.id
+        );
+        for b in r.iter().filter(|b| b.id > a.id) {
+            assert!((a.x - b.x).hypot(a.y - b.y) >= 0.5 - 1e-9);
+        }
+    }
 }

@@ -5,7 +5,7 @@
 //! closer than `avoid_distance` ahead, turns toward the more open side and slows down.
 
 use std::f64::consts::PI;
-use swarmrt_protocol::config::{Config, GotoConfig, LidarConfig, grid_around};
+use swarmrt_protocol::config::{Config, GotoConfig, LidarConfig, nearest_grid_points};
 use swarmrt_protocol::{BROADCAST, Command, Observation, RadioMsg};
 
 use super::Behaviour;
@@ -36,7 +36,18 @@ impl Goto {
     /// Robot `id`'s behaviour for this scenario.
     pub fn new(cfg: &Config, params: &GotoConfig, id: u32) -> Goto {
         let g = cfg.map.goal;
-        let slots = grid_around(cfg.robots.count as usize, g.x, g.y, params.slot_spacing);
+        // Slots: the grid points nearest the goal centre inside the map. The robot does not
+        // know the obstacles (it only senses them), so a slot may be unreachable; it then
+        // parks as close as the lidar lets it.
+        let slots = nearest_grid_points(
+            cfg.robots.count as usize,
+            (g.x, g.y),
+            params.slot_spacing.max(2.5 * cfg.robots.radius),
+            cfg.map.bounds,
+            cfg.robots.radius,
+            |_, _| true,
+        )
+        .unwrap_or_else(|| vec![(g.x, g.y); cfg.robots.count as usize]);
         Goto {
             id,
             params: *params,
