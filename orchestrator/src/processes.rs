@@ -276,8 +276,12 @@ fn supervise(
         }
     }
 
-    // Supervise until the world reports the end.
+    // Supervise until the world reports the end. The world's exit (from the reaper) and its
+    // last report (from the stdout reader) race on the channel, so its end is judged only
+    // once both its exit and the EOF of its stdout have arrived.
     let mut done = false;
+    let mut world_eof = false;
+    let mut world_exit: Option<String> = None;
     let mut interrupts = 0;
     while !done {
         match rx.recv()? {
@@ -292,12 +296,11 @@ fn supervise(
                 done = true;
             }
             Msg::Report(Report::Listening) => {}
-            Msg::WorldEof => {}
+            Msg::WorldEof => world_eof = true,
             Msg::Exited { pid, how } => {
                 if pid == world_pid {
                     world_alive = false;
-                    outcome.world_failure = Some(format!("world process {how} before finishing"));
-                    done = true;
+                    world_exit = Some(how);
                 } else if let Some(id) = robots.remove(&pid) {
                     // Code 0 is a robot that saw the world's shutdown sample before we saw
                     // the world's Done report: a clean end, not a death.
@@ -326,6 +329,13 @@ fn supervise(
                     signal_all(&all, libc::SIGKILL);
                 }
             }
+        }
+        if !done
+            && world_eof
+            && let Some(how) = &world_exit
+        {
+            outcome.world_failure = Some(format!("world process {how} before finishing"));
+            done = true;
         }
     }
     drop(world_stdin);
