@@ -90,6 +90,17 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
     let mut world = World::new(cfg).map_err(|e| format!("{}: {}", e.key, e.message))?;
     let mut recorder = Recorder::create(out_dir)?;
 
+    match ipc::raise_fd_limit() {
+        Ok(limit) if limit < 8 * n as u64 + 64 => {
+            tracing::warn!(
+                limit,
+                robots = n,
+                "open-file limit may be too low for this many robots"
+            )
+        }
+        Ok(_) => {}
+        Err(e) => tracing::warn!("cannot raise the open-file limit: {e}"),
+    }
     let node = ipc::node(run, &run.world_node_name())?;
     let services = ipc::create_services(&node, run, n)?;
     let publisher = services
