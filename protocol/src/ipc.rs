@@ -58,7 +58,7 @@ pub fn raise_fd_limit() -> std::io::Result<u64> {
             return Err(std::io::Error::last_os_error());
         }
     }
-    Ok(lim.rlim_cur as u64)
+    Ok(lim.rlim_cur)
 }
 
 /// Creates a node named `name` with the run's config.
