@@ -7,13 +7,7 @@ use swarmrt_orchestrator::error::SwarmError;
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
-        )
-        .with_writer(std::io::stderr)
-        .init();
+    swarmrt_protocol::logging::init();
     let (tx, rx) = crossbeam_channel::unbounded::<()>();
     if let Err(e) = ctrlc::set_handler(move || {
         let _ = tx.send(());

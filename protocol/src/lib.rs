@@ -22,6 +22,7 @@
 pub mod config;
 pub mod control;
 pub mod ipc;
+pub mod logging;
 pub mod messages;
 pub mod radio_msg;
 pub mod services;

@@ -220,3 +220,12 @@ pub fn run_id_of(children: &[(i32, String)]) -> String {
         })
         .expect("children carry --run-id")
 }
+
+/// Asserts a finished run left nothing behind: none of `children` still runs and no file of
+/// `run_id` remains in the iceoryx2 root or /dev/shm.
+pub fn assert_nothing_left(children: &[(i32, String)], run_id: &str) {
+    for (pid, cmd) in children {
+        assert!(!alive(*pid), "process left running: {cmd}");
+    }
+    assert!(leftovers(run_id).is_empty(), "{:?}", leftovers(run_id));
+}

@@ -76,11 +76,7 @@ fn killing_one_robot_process_mid_run() {
         8
     );
 
-    for (pid, cmd) in &children {
-        assert!(!alive(*pid), "process left running: {cmd}");
-    }
-    let run_id = m["run_id"].as_str().unwrap();
-    assert!(leftovers(run_id).is_empty(), "{:?}", leftovers(run_id));
+    assert_nothing_left(&children, m["run_id"].as_str().unwrap());
 }
 
 #[test]
@@ -112,10 +108,7 @@ fn killing_the_world_fails_the_run_without_hangs_or_leaks() {
     assert!(csv.ends_with('\n'));
     assert!(csv.lines().skip(1).all(|l| l.split(',').count() == 9));
     assert_eq!((csv.lines().count() - 1) % 9, 0, "whole ticks only");
-    for (pid, cmd) in &children {
-        assert!(!alive(*pid), "process left running: {cmd}");
-    }
-    assert!(leftovers(&run_id).is_empty(), "{:?}", leftovers(&run_id));
+    assert_nothing_left(&children, &run_id);
 }
 
 #[test]
@@ -159,8 +152,5 @@ fn ctrl_c_stops_the_run_and_keeps_complete_records() {
     assert_eq!(m["dead"], 0, "robots stopped by Ctrl-C are not deaths");
     let ticks = m["ticks"].as_u64().unwrap();
     assert_eq!(last_tick(&dir), ticks);
-    for (pid, cmd) in &children {
-        assert!(!alive(*pid), "process left running: {cmd}");
-    }
-    assert!(leftovers(m["run_id"].as_str().unwrap()).is_empty());
+    assert_nothing_left(&children, m["run_id"].as_str().unwrap());
 }

@@ -24,13 +24,7 @@ struct Args {
 /// Entry point of the process (the `swarm-world` binary in the orchestrator package).
 pub fn main() -> std::process::ExitCode {
     let args = Args::parse();
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
-        )
-        .with_writer(std::io::stderr)
-        .init();
+    swarmrt_protocol::logging::init();
     let span = tracing::info_span!("world", run_id = %args.run_id);
     let _enter = span.enter();
     if !valid_run_id(&args.run_id) {
