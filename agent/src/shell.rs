@@ -3,6 +3,7 @@
 
 use std::time::Duration;
 
+use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
 use swarmrt_protocol::config::Config;
 use swarmrt_protocol::ipc::{self, IpcError};
@@ -14,6 +15,38 @@ use crate::Agent;
 /// How long a robot sleeps before checking for a termination request when no tick comes
 /// (a watchdog interval, not a poll: a tick wakes it immediately).
 const IDLE_CHECK: Duration = Duration::from_millis(500);
+
+/// Environment variable that makes one robot send malformed commands, for tests of the
+/// world's input checks: `<robot>:<mode>` with mode `nan` (NaN speed), `wrong-tick`,
+/// `impersonate` (claims another robot's id), `double` (answers every tick twice) or
+/// `bad-frame` (an outbox length past the maximum).
+pub const MISBEHAVE_ENV: &str = "SWARMRT_TEST_MISBEHAVE";
+
+/// How a misbehaving robot corrupts its commands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Misbehave {
+    Nan,
+    WrongTick,
+    Impersonate,
+    Double,
+    BadFrame,
+}
+
+fn misbehave_for(id: u32) -> Option<Misbehave> {
+    let spec = std::env::var(MISBEHAVE_ENV).ok()?;
+    let (robot, mode) = spec.split_once(':')?;
+    if robot.parse::<u32>().ok()? != id {
+        return None;
+    }
+    match mode {
+        "nan" => Some(Misbehave::Nan),
+        "wrong-tick" => Some(Misbehave::WrongTick),
+        "impersonate" => Some(Misbehave::Impersonate),
+        "double" => Some(Misbehave::Double),
+        "bad-frame" => Some(Misbehave::BadFrame),
+        _ => None,
+    }
+}
 
 /// Why the robot loop ended.
 #[derive(Debug, PartialEq, Eq)]
@@ -38,6 +71,10 @@ pub fn run(run: &RunServices, cfg: &Config, id: u32) -> Result<Exit, IpcError> {
         .create()?;
 
     let mut agent = Agent::new(cfg, id);
+    let misbehave = misbehave_for(id);
+    if let Some(m) = misbehave {
+        tracing::warn!(?m, "test hook: this robot sends malformed commands");
+    }
     publisher.send_copy(Command::hello(id, std::process::id()))?;
     notifier.notify()?;
     tracing::debug!("hello sent");
@@ -59,12 +96,27 @@ pub fn run(run: &RunServices, cfg: &Config, id: u32) -> Result<Exit, IpcError> {
             let Some(obs) = sample.payload().get(id as usize) else {
                 return Err(format!("observation sample has no slot for robot {id}").into());
             };
-            let cmd = agent.step(obs);
+            let mut cmd = agent.step(obs);
             drop(sample);
+            match misbehave {
+                Some(Misbehave::Nan) => cmd.v = f64::NAN,
+                Some(Misbehave::WrongTick) => cmd.tick += 1,
+                Some(Misbehave::Impersonate) => cmd.robot = (id + 1) % cfg.robots.count,
+                Some(Misbehave::BadFrame) => cmd.outbox_len = u16::MAX,
+                Some(Misbehave::Double) => {
+                    publisher.send_copy(cmd)?;
+                }
+                None => {}
+            }
             publisher.send_copy(cmd)?;
             notifier.notify()?;
         }
-        listener.timed_wait(|_| {}, IDLE_CHECK)?;
+        match listener.timed_wait(|_| {}, IDLE_CHECK) {
+            Ok(_) => {}
+            // SIGTERM/SIGINT interrupt the wait: a request to stop, not a failure.
+            Err(ListenerWaitError::InterruptSignal) => return Ok(Exit::Terminated),
+            Err(e) => return Err(e.into()),
+        }
         if node.wait(Duration::ZERO).is_err() {
             return Ok(Exit::Terminated);
         }

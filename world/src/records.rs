@@ -59,13 +59,19 @@ impl Recorder {
         })
     }
 
+    /// Appends events without a trajectory row (e.g. a death noticed after the last tick).
+    pub fn record_events(&mut self, events: &[Event]) -> std::io::Result<()> {
+        if events.is_empty() {
+            return Ok(());
+        }
+        self.buf.clear();
+        event_lines(&mut self.buf, events);
+        self.events.write_all(self.buf.as_bytes())
+    }
+
     /// Records the robots' state at `tick` and the events that led to it.
     pub fn record(&mut self, tick: u64, robots: &[Robot], events: &[Event]) -> std::io::Result<()> {
-        if !events.is_empty() {
-            self.buf.clear();
-            event_lines(&mut self.buf, events);
-            self.events.write_all(self.buf.as_bytes())?;
-        }
+        self.record_events(events)?;
         self.buf.clear();
         trajectory_rows(&mut self.buf, tick, robots);
         self.trajectory.write_all(self.buf.as_bytes())

@@ -2,12 +2,14 @@
 //! runs lock-step ticks. It sleeps in an iceoryx2 listener while robots think; commands,
 //! and control lines from the orchestrator (relayed by a small thread), wake it.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::{BufRead, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, TryRecvError};
+use iceoryx2::identifiers::UniquePublisherId;
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::prelude::*;
 use swarmrt_protocol::config::Config;
 use swarmrt_protocol::control::{Control, Report};
@@ -30,10 +32,26 @@ const PROGRESS_EVERY: Duration = Duration::from_millis(200);
 pub struct ShellStats {
     /// Robot-ticks in which a robot answered after `scenario.deadline_ms`.
     pub late: u64,
-    /// Commands from ids that are not robots of this run.
+    /// Samples from publishers that never said hello as a robot of this run.
     pub unknown_sender: u64,
-    /// Commands for a tick other than the current one (stale or early).
-    pub wrong_tick: u64,
+    /// Extra samples from a robot that had already answered the current tick.
+    pub extra_commands: u64,
+    /// Hellos that claimed an id already taken, or came from an already bound publisher.
+    pub bad_hello: u64,
+}
+
+/// Sleeps until the command event fires or `timeout` passes. A termination signal arriving
+/// during the wait is a request to stop (`Ok(true)`), not a failure.
+fn wait(
+    listener: &Listener<ipc::Svc>,
+    node: &Node<ipc::Svc>,
+    timeout: Duration,
+) -> Result<bool, IpcError> {
+    match listener.timed_wait(|_| {}, timeout) {
+        Ok(_) => Ok(node.wait(Duration::ZERO).is_err()),
+        Err(ListenerWaitError::InterruptSignal) => Ok(true),
+        Err(e) => Err(e.into()),
+    }
 }
 
 fn report(r: &Report) {
@@ -120,15 +138,25 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
     let mut interrupted = false;
 
     // Phase 1: every robot says hello (or dies) before tick 0.
+    // Each robot is bound to the publisher its hello came from: later samples are
+    // attributed by origin, never by the id a robot writes into them.
+    let mut robot_of: BTreeMap<UniquePublisherId, u32> = BTreeMap::new();
     let mut waiting: BTreeSet<u32> = (0..n as u32).collect();
     while !waiting.is_empty() && !interrupted {
         while let Some(sample) = subscriber.receive()? {
+            let origin = sample.origin();
             let c = *sample.payload();
-            if c.version == PROTOCOL_VERSION
-                && CommandKind::from_u32(c.kind) == Some(CommandKind::Hello)
-                && waiting.remove(&c.robot)
-            {
+            let hello = c.version == PROTOCOL_VERSION
+                && CommandKind::from_u32(c.kind) == Some(CommandKind::Hello);
+            if hello && !robot_of.contains_key(&origin) && waiting.remove(&c.robot) {
+                robot_of.insert(origin, c.robot);
                 tracing::debug!(robot = c.robot, pid = c.pid, "robot ready");
+            } else {
+                stats.bad_hello += 1;
+                tracing::warn!(
+                    robot = c.robot,
+                    "ignoring a hello that is malformed or claims a taken id"
+                );
             }
         }
         interrupted |= drain_control(&control, &node, &mut world, &mut waiting)?;
@@ -143,8 +171,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
             )
             .into());
         }
-        listener.timed_wait(|_| {}, Duration::from_millis(500))?;
-        interrupted |= node.wait(Duration::ZERO).is_err();
+        interrupted |= wait(&listener, &node, Duration::from_millis(500))?;
     }
     report(&Report::Ready {
         startup_ms: started.elapsed().as_millis() as u64,
@@ -181,22 +208,26 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
         let mut late_logged = false;
         loop {
             while let Some(sample) = subscriber.receive()? {
+                let origin = sample.origin();
                 let c = *sample.payload();
                 drop(sample);
-                let id = c.robot as usize;
-                if id >= n {
+                let Some(&robot) = robot_of.get(&origin) else {
                     stats.unknown_sender += 1;
                     if stats.unknown_sender == 1 {
-                        tracing::warn!(robot = c.robot, "command from an unknown robot id");
+                        tracing::warn!(
+                            claimed = c.robot,
+                            "command from a publisher that is no robot of this run"
+                        );
                     }
                     continue;
-                }
-                if c.tick != tick || CommandKind::from_u32(c.kind) != Some(CommandKind::Act) {
-                    stats.wrong_tick += 1;
-                    continue;
-                }
-                if waiting.remove(&c.robot) {
-                    commands[id] = Some(c);
+                };
+                // The first sample after the observation is the robot's answer, whatever it
+                // says: World::validate refuses a wrong tick, kind, id or version, and the
+                // robot stands still this tick instead of the world waiting forever.
+                if waiting.remove(&robot) {
+                    commands[robot as usize] = Some(c);
+                } else {
+                    stats.extra_commands += 1;
                 }
             }
             interrupted |= drain_control(&control, &node, &mut world, &mut waiting)?;
@@ -214,8 +245,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
                 }
                 Duration::from_millis(500)
             };
-            listener.timed_wait(|_| {}, timeout)?;
-            interrupted |= node.wait(Duration::ZERO).is_err();
+            interrupted |= wait(&listener, &node, timeout)?;
         }
         if interrupted {
             break;
@@ -239,10 +269,8 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
     };
     sample.send()?;
     obs_notifier.notify()?;
-    let events = world.drain_events();
-    if !events.is_empty() {
-        recorder.record(world.tick(), world.robots(), &events)?;
-    }
+    // Deaths marked after the last recorded tick: events only, the tick's rows exist.
+    recorder.record_events(&world.drain_events())?;
     let mut metrics = serde_json::to_value(world.metrics())?;
     metrics["shell"] = serde_json::to_value(&stats)?;
     report(&Report::Tick { tick: world.tick() });

@@ -1,0 +1,97 @@
+//! A robot process that sends malformed commands over the real IPC path is refused and
+//! counted; the world and the other robots go on, and nothing hangs.
+
+use std::process::{Command, Stdio};
+use std::time::Duration;
+use swarmrt_tests::{bytes, metrics, swarm_bin, wait_with_watchdog, workspace};
+
+const LIMIT: Duration = Duration::from_secs(120);
+
+/// Runs goto_simple for 60 ticks with robot 3 misbehaving in `mode`; returns the metrics and
+/// robot 3's distinct positions.
+fn run_with(mode: &str) -> (serde_json::Value, usize) {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let child = Command::new(swarm_bin())
+        .current_dir(workspace())
+        .args([
+            "run",
+            "configs/goto_simple.toml",
+            "--ticks",
+            "60",
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .env("SWARMRT_TEST_MISBEHAVE", format!("3:{mode}"))
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let out = wait_with_watchdog(child, LIMIT);
+    assert!(
+        out.status.success(),
+        "{mode}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m = metrics(&dir);
+    assert_eq!(m["ticks"], 60, "{mode}: the run went on");
+    let csv = String::from_utf8(bytes(&dir, "trajectory.csv")).unwrap();
+    let mut positions: Vec<(String, String)> = csv
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').nth(1) == Some("3"))
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[2].to_string(), f[3].to_string())
+        })
+        .collect();
+    positions.dedup();
+    // The well-behaved robots still move.
+    let moved = csv
+        .lines()
+        .skip(1)
+        .filter(|l| l.starts_with("60,") && !l.contains(",3,"))
+        .count();
+    assert_eq!(moved, 8);
+    (m, positions.len())
+}
+
+#[test]
+fn nan_speed_is_refused_and_the_robot_stands_still() {
+    let (m, positions) = run_with("nan");
+    assert_eq!(m["rejected"], 60, "{m}");
+    assert_eq!(positions, 1, "never moved");
+}
+
+#[test]
+fn wrong_tick_is_refused_without_hanging_the_world() {
+    let (m, positions) = run_with("wrong-tick");
+    assert_eq!(m["rejected"], 60, "{m}");
+    assert_eq!(positions, 1);
+}
+
+#[test]
+fn a_robot_cannot_answer_for_another() {
+    let (m, positions) = run_with("impersonate");
+    assert_eq!(
+        m["rejected"], 60,
+        "its own slot is refused, robot 4's is untouched: {m}"
+    );
+    assert_eq!(positions, 1);
+}
+
+#[test]
+fn an_outbox_length_past_the_maximum_is_refused() {
+    let (m, _) = run_with("bad-frame");
+    assert_eq!(m["rejected"], 60, "{m}");
+}
+
+#[test]
+fn a_second_answer_in_one_tick_is_counted_and_ignored() {
+    // Whether the duplicate is drained in its own tick (ignored) or in the next one (taken
+    // as that tick's answer and refused as a wrong tick) depends on wake-up timing; either
+    // way one sample per tick is surplus and the run goes on.
+    let (m, _) = run_with("double");
+    assert!(m["shell"]["extra_commands"].as_u64().unwrap() >= 59, "{m}");
+}
