@@ -8,11 +8,40 @@ use swarmrt_protocol::services::{IPC_BASE_DIR, SHM_DIR, ipc_root_of, shm_prefix_
 /// File in a run's iceoryx2 root holding the orchestrator's pid.
 pub const OWNER_FILE: &str = "swarmrt-owner.pid";
 
-/// Marks `run_id` as owned by this process (so `swarm clean` leaves it alone while we live).
+/// Start time of a process in clock ticks since boot (field 22 of `/proc/<pid>/stat`): with
+/// the pid it names a process uniquely, so a recycled pid is not mistaken for the owner.
+fn start_time(pid: i32) -> Option<u64> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    let (_, rest) = stat.rsplit_once(')')?;
+    // After the command name come fields 3, 4, ...; field 22 is the 20th of those.
+    rest.split_whitespace().nth(19)?.parse().ok()
+}
+
+/// Marks `run_id` as owned by this process, so `swarm clean` leaves it alone while it lives.
+/// The root appears atomically (built aside, then renamed) with its owner file inside, so a
+/// concurrent `swarm clean` never sees an unowned root of a live run.
 pub fn claim(run_id: &str) -> std::io::Result<()> {
-    let root = ipc_root_of(run_id);
-    std::fs::create_dir_all(&root)?;
-    std::fs::write(root.join(OWNER_FILE), std::process::id().to_string())
+    let pid = std::process::id();
+    let base = Path::new(IPC_BASE_DIR);
+    std::fs::create_dir_all(base)?;
+    let aside = base.join(format!(".claim-{run_id}-{pid}"));
+    std::fs::create_dir(&aside)?;
+    let owner = format!("{pid} {}", start_time(pid as i32).unwrap_or(0));
+    std::fs::write(aside.join(OWNER_FILE), owner)?;
+    std::fs::rename(&aside, ipc_root_of(run_id))
+}
+
+/// True when the owner recorded as "pid start-time" is still that very process.
+fn owner_alive(owner: &str) -> bool {
+    let mut it = owner.split_whitespace();
+    let Some(pid) = it.next().and_then(|p| p.parse::<i32>().ok()) else {
+        return false;
+    };
+    let recorded = it.next().and_then(|t| t.parse::<u64>().ok()).unwrap_or(0);
+    match start_time(pid) {
+        Some(now) => recorded == 0 || now == recorded,
+        None => pid_alive(pid),
+    }
 }
 
 /// Removes everything of `run_id`; returns how many files and directories were removed.
@@ -82,7 +111,16 @@ pub fn clean_dead_runs() -> (Vec<String>, Vec<String>) {
     let mut run_ids: Vec<String> = Vec::new();
     if let Ok(entries) = std::fs::read_dir(IPC_BASE_DIR) {
         for e in entries.flatten() {
-            run_ids.push(e.file_name().to_string_lossy().to_string());
+            let name = e.file_name().to_string_lossy().to_string();
+            if name.starts_with(".claim-") {
+                // A claim whose orchestrator died before renaming it into place.
+                let owner = std::fs::read_to_string(e.path().join(OWNER_FILE)).unwrap_or_default();
+                if !owner_alive(&owner) {
+                    let _ = std::fs::remove_dir_all(e.path());
+                }
+                continue;
+            }
+            run_ids.push(name);
         }
     }
     // Shared memory of a run whose root directory is already gone.
@@ -103,10 +141,8 @@ pub fn clean_dead_runs() -> (Vec<String>, Vec<String>) {
         if !valid_run_id(&id) {
             continue;
         }
-        let owner = std::fs::read_to_string(ipc_root_of(&id).join(OWNER_FILE))
-            .ok()
-            .and_then(|s| s.trim().parse::<i32>().ok());
-        if owner.is_some_and(pid_alive) {
+        let owner = std::fs::read_to_string(ipc_root_of(&id).join(OWNER_FILE)).ok();
+        if owner.as_deref().is_some_and(owner_alive) {
             alive.push(id);
         } else {
             remove_run(&id);
@@ -114,4 +150,21 @@ pub fn clean_dead_runs() -> (Vec<String>, Vec<String>) {
         }
     }
     (removed, alive)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn owner_is_alive_only_with_matching_start_time() {
+        let me = std::process::id() as i32;
+        let start = start_time(me).unwrap();
+        assert!(owner_alive(&format!("{me} {start}")));
+        assert!(
+            !owner_alive(&format!("{me} {}", start + 1)),
+            "a recycled pid is not the owner"
+        );
+        assert!(!owner_alive("garbage"));
+    }
 }

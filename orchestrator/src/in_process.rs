@@ -9,12 +9,15 @@ use swarmrt_protocol::config::Config;
 use swarmrt_world::records::Recorder;
 use swarmrt_world::{World, WorldMetrics};
 
-/// Runs the scenario to the end, recording into `dir`; `progress` gets each completed tick.
+/// Runs the scenario to the end (or until `interrupt` fires, checked every tick), recording
+/// into `dir`; `progress` gets each completed tick. Returns the metrics and whether it was
+/// interrupted.
 pub fn run(
     cfg: &Config,
     dir: &Path,
+    interrupt: &crossbeam_channel::Receiver<()>,
     mut progress: impl FnMut(u64),
-) -> anyhow::Result<WorldMetrics> {
+) -> anyhow::Result<(WorldMetrics, bool)> {
     let mut world = World::new(cfg).map_err(|e| anyhow::anyhow!("{}: {}", e.key, e.message))?;
     let n = cfg.robots.count as usize;
     let mut agents: Vec<Agent> = (0..n as u32).map(|id| Agent::new(cfg, id)).collect();
@@ -22,7 +25,12 @@ pub fn run(
     let mut obs = vec![Observation::empty(0, 0); n];
     let events = world.drain_events();
     recorder.record(world.tick(), world.robots(), &events)?;
+    let mut interrupted = false;
     while !world.finished() {
+        if interrupt.try_recv().is_ok() {
+            interrupted = true;
+            break;
+        }
         world.observe(&mut obs);
         let commands: Vec<_> = agents
             .iter_mut()
@@ -34,5 +42,5 @@ pub fn run(
         recorder.record(world.tick(), world.robots(), &events)?;
         progress(world.tick());
     }
-    Ok(world.metrics())
+    Ok((world.metrics(), interrupted))
 }

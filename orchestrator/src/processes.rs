@@ -21,7 +21,10 @@ use swarmrt_protocol::services::RunServices;
 
 use crate::cleanup;
 
-/// How long children get to exit by themselves after the run ended before they are killed.
+/// How long robots get to exit on the world's shutdown sample before they are sent SIGTERM
+/// (a robot that subscribed after that sample never sees it).
+const SHUTDOWN_GRACE: Duration = Duration::from_secs(1);
+/// How long children get after SIGTERM before they are killed.
 const EXIT_GRACE: Duration = Duration::from_secs(10);
 
 /// How `describe` renders a robot's clean exit after the world's shutdown sample.
@@ -84,10 +87,16 @@ fn child_command(bin: &Path) -> Command {
     // Own process group: a terminal's Ctrl-C reaches only the orchestrator, which then stops
     // the run in order. If the orchestrator dies, the child gets SIGTERM and exits cleanly.
     cmd.process_group(0);
+    let parent = std::process::id() as libc::pid_t;
     unsafe {
-        cmd.pre_exec(|| {
+        cmd.pre_exec(move || {
             if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
                 return Err(std::io::Error::last_os_error());
+            }
+            // The orchestrator may have died between fork and prctl; then no signal will
+            // ever come. Only async-signal-safe calls here (the parent has threads).
+            if libc::getppid() != parent {
+                libc::_exit(1);
             }
             Ok(())
         });
@@ -105,7 +114,9 @@ fn describe(status: i32) -> String {
     }
 }
 
-fn spawn_reaper(tx: Sender<Msg>) {
+/// Reaps every child. On ECHILD (no child right now) it waits for `spawned` to say more
+/// were started, and ends when `spawned`'s sender is dropped.
+fn spawn_reaper(tx: Sender<Msg>, spawned: Receiver<()>) {
     std::thread::spawn(move || {
         loop {
             let mut status = 0;
@@ -122,8 +133,8 @@ fn spawn_reaper(tx: Sender<Msg>) {
                 }
             } else if std::io::Error::last_os_error().raw_os_error() == Some(libc::EINTR) {
                 continue;
-            } else {
-                return; // ECHILD: every child has been reaped.
+            } else if spawned.recv().is_err() {
+                return; // ECHILD and the supervisor is done.
             }
         }
     });
@@ -181,11 +192,16 @@ fn supervise(
     let mut outcome = ProcessOutcome::default();
     let (tx, rx) = crossbeam_channel::unbounded::<Msg>();
 
+    let interrupted_flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     {
         let tx = tx.clone();
+        let flag = interrupted_flag.clone();
         std::thread::spawn(move || {
-            if interrupt.recv().is_ok() {
-                let _ = tx.send(Msg::Interrupt);
+            while interrupt.recv().is_ok() {
+                flag.store(true, std::sync::atomic::Ordering::SeqCst);
+                if tx.send(Msg::Interrupt).is_err() {
+                    return;
+                }
             }
         });
     }
@@ -219,7 +235,8 @@ fn supervise(
             let _ = tx.send(Msg::WorldEof);
         });
     }
-    spawn_reaper(tx.clone());
+    let (spawned_tx, spawned_rx) = crossbeam_channel::unbounded::<()>();
+    spawn_reaper(tx.clone(), spawned_rx);
 
     // Robots start once the world's services exist.
     let mut world_alive = true;
@@ -238,13 +255,17 @@ fn supervise(
             Msg::Interrupt => {
                 signal_all(&[world_pid], libc::SIGTERM);
                 outcome.interrupted = true;
-                wait_for_exit(&rx, &[world_pid], &mut BTreeMap::new());
+                wait_for_exit(&rx, &[world_pid], &mut BTreeMap::new(), Duration::ZERO);
                 return Ok(outcome);
             }
         }
     }
     let mut robots: BTreeMap<i32, u32> = BTreeMap::new();
     for id in 0..n {
+        if interrupted_flag.load(std::sync::atomic::Ordering::SeqCst) {
+            // Ctrl-C during start-up: start no more robots; the main loop stops the world.
+            break;
+        }
         let child = child_command(&agent_bin)
             .args([
                 "--run-id",
@@ -259,6 +280,7 @@ fn supervise(
         match child {
             Ok(c) => {
                 robots.insert(c.id() as i32, id);
+                let _ = spawned_tx.send(());
             }
             Err(e) => {
                 tracing::error!(robot = id, "cannot start robot: {e}");
@@ -340,37 +362,64 @@ fn supervise(
     }
     drop(world_stdin);
 
-    // The world told robots to exit (or died); give everyone a grace period, then SIGKILL.
+    // The world told robots to exit (or died): give them a moment to go by themselves, then
+    // SIGTERM, then SIGKILL.
     let mut remaining: Vec<i32> = robots.keys().copied().collect();
     if world_alive {
         remaining.push(world_pid);
-    } else {
-        signal_all(&remaining, libc::SIGTERM);
     }
-    wait_for_exit(&rx, &remaining, &mut robots);
+    let grace = if world_alive {
+        SHUTDOWN_GRACE
+    } else {
+        Duration::ZERO
+    };
+    wait_for_exit(&rx, &remaining, &mut robots, grace);
+    drop(spawned_tx);
     Ok(outcome)
 }
 
-/// Waits until every pid in `pids` has been reaped; SIGKILLs stragglers after the grace.
-fn wait_for_exit(rx: &Receiver<Msg>, pids: &[i32], robots: &mut BTreeMap<i32, u32>) {
+/// Waits until every pid in `pids` has been reaped: after `grace` the rest get SIGTERM, after
+/// a further [`EXIT_GRACE`] SIGKILL. Ctrl-C while waiting kills at once.
+fn wait_for_exit(
+    rx: &Receiver<Msg>,
+    pids: &[i32],
+    robots: &mut BTreeMap<i32, u32>,
+    grace: Duration,
+) {
     let mut left: std::collections::BTreeSet<i32> = pids.iter().copied().collect();
-    let deadline = Instant::now() + EXIT_GRACE;
-    let mut killed = false;
+    let mut stage = 0; // 0: waiting, 1: SIGTERM sent, 2: SIGKILL sent
+    let mut deadline = Instant::now() + grace;
     while !left.is_empty() {
         let wait = deadline.saturating_duration_since(Instant::now());
-        match rx.recv_timeout(if killed { EXIT_GRACE } else { wait }) {
+        let pending: Vec<i32> = left.iter().copied().collect();
+        match rx.recv_timeout(wait) {
             Ok(Msg::Exited { pid, .. }) => {
                 left.remove(&pid);
                 robots.remove(&pid);
             }
+            Ok(Msg::Interrupt) => {
+                signal_all(&pending, libc::SIGKILL);
+                stage = 2;
+                deadline = Instant::now() + EXIT_GRACE;
+            }
             Ok(_) => {}
-            Err(crossbeam_channel::RecvTimeoutError::Timeout) if !killed => {
+            Err(crossbeam_channel::RecvTimeoutError::Timeout) if stage == 0 => {
+                tracing::debug!(
+                    count = left.len(),
+                    "processes still running; sending SIGTERM"
+                );
+                signal_all(&pending, libc::SIGTERM);
+                stage = 1;
+                deadline = Instant::now() + EXIT_GRACE;
+            }
+            Err(crossbeam_channel::RecvTimeoutError::Timeout) if stage == 1 => {
                 tracing::warn!(
                     count = left.len(),
                     "processes did not exit in time; killing them"
                 );
-                signal_all(&left.iter().copied().collect::<Vec<_>>(), libc::SIGKILL);
-                killed = true;
+                signal_all(&pending, libc::SIGKILL);
+                stage = 2;
+                deadline = Instant::now() + EXIT_GRACE;
             }
             Err(_) => {
                 tracing::error!(count = left.len(), "processes could not be reaped");

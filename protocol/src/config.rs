@@ -467,6 +467,9 @@ fn default_slot_spacing() -> f64 {
     0.6
 }
 
+/// Largest coordinate magnitude in metres: keeps grid arithmetic far from overflow.
+pub const MAX_COORD: f64 = 1e6;
+
 /// Upper bound on robots in one run (process mode is limited by the machine long before).
 pub const MAX_ROBOTS: u32 = 100_000;
 
@@ -538,7 +541,7 @@ impl Config {
 
         let m = &self.map;
         for (i, v) in m.bounds.iter().enumerate() {
-            finite(&format!("map.bounds[{i}]"), *v)?;
+            range_f(&format!("map.bounds[{i}]"), *v, -MAX_COORD, MAX_COORD)?;
         }
         check(
             m.bounds[2] > m.bounds[0] && m.bounds[3] > m.bounds[1],
@@ -590,8 +593,8 @@ impl Config {
         range_f("robots.radius", r.radius, 1e-3, 100.0)?;
         range_f("robots.max_speed", r.max_speed, 0.0, 1000.0)?;
         range_f("robots.max_turn_rate", r.max_turn_rate, 0.0, 1000.0)?;
-        finite("robots.start.x", r.start.x)?;
-        finite("robots.start.y", r.start.y)?;
+        range_f("robots.start.x", r.start.x, -MAX_COORD, MAX_COORD)?;
+        range_f("robots.start.y", r.start.y, -MAX_COORD, MAX_COORD)?;
         range_f("robots.start.spacing", r.start.spacing, 2.0 * r.radius + 1e-6, 1e6)
             .map_err(|(k, _)| {
                 (
@@ -705,16 +708,17 @@ pub fn nearest_grid_points(
     if !spacing.is_finite() || spacing <= 0.0 {
         return None;
     }
-    let lo_i = ((bounds[0] + margin - centre.0) / spacing).ceil() as i64;
-    let hi_i = ((bounds[2] - margin - centre.0) / spacing).floor() as i64;
-    let lo_j = ((bounds[1] + margin - centre.1) / spacing).ceil() as i64;
-    let hi_j = ((bounds[3] - margin - centre.1) / spacing).floor() as i64;
-    if hi_i < lo_i || hi_j < lo_j {
+    // Index ranges in f64 first: a tiny spacing on a large map must not overflow i64.
+    let lo_i = ((bounds[0] + margin - centre.0) / spacing).ceil();
+    let hi_i = ((bounds[2] - margin - centre.0) / spacing).floor();
+    let lo_j = ((bounds[1] + margin - centre.1) / spacing).ceil();
+    let hi_j = ((bounds[3] - margin - centre.1) / spacing).floor();
+    if !(hi_i >= lo_i && hi_j >= lo_j)
+        || (hi_i - lo_i + 1.0) * (hi_j - lo_j + 1.0) > MAX_GRID_CANDIDATES as f64
+    {
         return None;
     }
-    if (hi_i - lo_i + 1).saturating_mul(hi_j - lo_j + 1) > MAX_GRID_CANDIDATES {
-        return None;
-    }
+    let (lo_i, hi_i, lo_j, hi_j) = (lo_i as i64, hi_i as i64, lo_j as i64, hi_j as i64);
     let mut cells: Vec<(i64, i64, i64)> = Vec::new();
     for j in lo_j..=hi_j {
         for i in lo_i..=hi_i {
@@ -869,6 +873,19 @@ count = 4
     fn negative_count_is_refused() {
         let e = load(MINIMAL, &["robots.count=-3"]).unwrap_err();
         assert_eq!(e.key, "robots.count", "{e}");
+    }
+
+    #[test]
+    fn huge_coordinates_are_refused_not_overflowed() {
+        let e = load(MINIMAL, &["map.bounds=[-5e18, 0.0, 5e18, 12.0]"]).unwrap_err();
+        assert_eq!(e.key, "map.bounds[0]", "{e}");
+        // Even called directly with absurd input, the grid search gives up instead of looping.
+        assert_eq!(
+            nearest_grid_points(3, (0.0, 0.0), 1e-9, [-1e6, -1e6, 1e6, 1e6], 0.1, |_, _| {
+                true
+            }),
+            None
+        );
     }
 
     #[test]

@@ -154,3 +154,60 @@ fn ctrl_c_stops_the_run_and_keeps_complete_records() {
     assert_eq!(last_tick(&dir), ticks);
     assert_nothing_left(&children, m["run_id"].as_str().unwrap());
 }
+
+#[test]
+fn ctrl_c_stops_an_in_process_run_too() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let child = start_long_run(&dir, &["--in-process"]);
+    stop_run(&child);
+    let out = wait_with_watchdog(child, LIMIT);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m = metrics(&dir);
+    assert_eq!(m["interrupted"], true);
+    assert_eq!(m["reproducible"], false);
+    assert_eq!(last_tick(&dir), m["ticks"].as_u64().unwrap());
+}
+
+/// Regression: Ctrl-C while robots were still starting left the late ones waiting for a
+/// shutdown sample published before they subscribed; the orchestrator then sat out its whole
+/// grace period and SIGKILLed them.
+#[test]
+fn ctrl_c_during_start_up_stops_every_robot_without_sigkill() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let child = std::process::Command::new(swarm_bin())
+        .current_dir(workspace())
+        .args([
+            "run",
+            "configs/goto_simple.toml",
+            "--set",
+            "robots.count=60",
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_until("some robots to start", LIMIT, || {
+        children_of(child.id()).len() > 10
+    });
+    let children = children_of(child.id());
+    stop_run(&child);
+    let out = wait_with_watchdog(child, LIMIT);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        !err.contains("killing them"),
+        "robots had to be SIGKILLed:\n{err}"
+    );
+    let m = metrics(&dir);
+    assert_eq!(m["interrupted"], true);
+    assert_nothing_left(&children, m["run_id"].as_str().unwrap());
+}

@@ -73,15 +73,30 @@ pub fn run(
 
     let failure: Option<String>;
     if args.in_process {
-        let world = in_process::run(&cfg, &dir, |t| pb.set_position(t))?;
+        let (world, interrupted) = in_process::run(&cfg, &dir, &interrupt, |t| pb.set_position(t))?;
         merge(
             &mut metrics,
             serde_json::to_value(world).map_err(anyhow::Error::from)?,
         );
-        metrics["reproducible"] = json!(true);
+        metrics["interrupted"] = json!(interrupted);
+        metrics["reproducible"] = json!(!interrupted);
         failure = None;
     } else {
-        let out = processes::run(&cfg, &config_path, &dir, interrupt, |t| pb.set_position(t))?;
+        let out = match processes::run(&cfg, &config_path, &dir, interrupt, |t| pb.set_position(t))
+        {
+            Ok(out) => out,
+            Err(e) => {
+                // Even a run that never started leaves a metrics.json saying why.
+                pb.finish_and_clear();
+                metrics["failed"] = json!(true);
+                metrics["failure"] = json!(format!("{e:#}"));
+                metrics["ticks"] = json!(recorded_ticks(&dir));
+                metrics["wall_seconds"] = json!(started.elapsed().as_secs_f64());
+                run_dir::write_metrics(&dir, &metrics)?;
+                println!("{}", dir.display());
+                return Err(SwarmError::Internal(e));
+            }
+        };
         if let Some(w) = out.world_metrics {
             merge(&mut metrics, w);
         }
