@@ -2,8 +2,6 @@
 
 use crate::shell;
 use clap::Parser;
-use swarmrt_protocol::config::Config;
-use swarmrt_protocol::services::{RunServices, valid_run_id};
 
 /// One robot of a swarmrt run.
 #[derive(Parser, Debug)]
@@ -27,12 +25,8 @@ pub fn main() -> std::process::ExitCode {
     swarmrt_protocol::logging::init();
     let span = tracing::info_span!("robot", agent_id = args.robot);
     let _enter = span.enter();
-    if !valid_run_id(&args.run_id) {
-        tracing::error!(run_id = %args.run_id, "invalid run id");
-        return std::process::ExitCode::from(2);
-    }
-    let cfg = match Config::load(&args.config, &[]) {
-        Ok(c) => c,
+    let (run, cfg) = match swarmrt_protocol::child::load_run(&args.run_id, &args.config) {
+        Ok(x) => x,
         Err(e) => {
             tracing::error!("{e}");
             return std::process::ExitCode::from(2);
@@ -42,7 +36,6 @@ pub fn main() -> std::process::ExitCode {
         tracing::error!(robots = cfg.robots.count, "robot id out of range");
         return std::process::ExitCode::from(2);
     }
-    let run = RunServices::new(&args.run_id);
     match shell::run(&run, &cfg, args.robot) {
         // Exit code 0 means exactly "the world ended the run", so the orchestrator can tell a
         // clean end from a robot that vanished mid-run.

@@ -39,11 +39,7 @@ fn killing_one_robot_process_mid_run() {
     });
     stop_run(&child);
     let out = wait_with_watchdog(child, LIMIT);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
 
     let m = metrics(&dir);
     assert_eq!(m["dead"], 1, "{m}");
@@ -142,11 +138,7 @@ fn ctrl_c_stops_the_run_and_keeps_complete_records() {
     let children = children_of(child.id());
     stop_run(&child);
     let out = wait_with_watchdog(child, LIMIT);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let m = metrics(&dir);
     assert_eq!(m["interrupted"], true);
     assert_eq!(m["dead"], 0, "robots stopped by Ctrl-C are not deaths");
@@ -162,11 +154,7 @@ fn ctrl_c_stops_an_in_process_run_too() {
     let child = start_long_run(&dir, &["--in-process"]);
     stop_run(&child);
     let out = wait_with_watchdog(child, LIMIT);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let m = metrics(&dir);
     assert_eq!(m["interrupted"], true);
     assert_eq!(m["reproducible"], false);

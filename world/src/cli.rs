@@ -2,8 +2,6 @@
 
 use crate::shell;
 use clap::Parser;
-use swarmrt_protocol::config::Config;
-use swarmrt_protocol::services::{RunServices, valid_run_id};
 
 /// The world process of a swarmrt run.
 #[derive(Parser, Debug)]
@@ -27,18 +25,14 @@ pub fn main() -> std::process::ExitCode {
     swarmrt_protocol::logging::init();
     let span = tracing::info_span!("world", run_id = %args.run_id);
     let _enter = span.enter();
-    if !valid_run_id(&args.run_id) {
-        tracing::error!(run_id = %args.run_id, "invalid run id");
-        return std::process::ExitCode::from(2);
-    }
-    let cfg = match Config::load(&args.config, &[]) {
-        Ok(c) => c,
+    let (run, cfg) = match swarmrt_protocol::child::load_run(&args.run_id, &args.config) {
+        Ok(x) => x,
         Err(e) => {
             tracing::error!("{e}");
             return std::process::ExitCode::from(2);
         }
     };
-    match shell::run(&RunServices::new(&args.run_id), &cfg, &args.out) {
+    match shell::run(&run, &cfg, &args.out) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             tracing::error!("world failed: {e}");

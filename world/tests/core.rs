@@ -6,6 +6,13 @@ use swarmrt_protocol::config::Config;
 use swarmrt_protocol::{BROADCAST, Command, MAX_OUTBOX, Observation, RadioMsg, RobotState};
 use swarmrt_world::{Event, World};
 
+/// A message to fill outboxes with.
+const BEACON: RadioMsg = RadioMsg::Beacon {
+    x: 0.0,
+    y: 0.0,
+    theta: 0.0,
+};
+
 /// One robot at (2, 2) facing +x, a circle at (6, 2), walls at 0 and 10.
 fn config(extra: &[&str]) -> Config {
     let text = r#"
@@ -101,27 +108,11 @@ fn nan_wrong_version_wrong_tick_and_bad_frames_are_rejected() {
     c.outbox_len = MAX_OUTBOX as u16 + 1;
     assert!(w.validate(0, &c).is_err());
     let mut c = good;
-    c.push_frame(
-        BROADCAST,
-        &RadioMsg::Beacon {
-            x: 0.0,
-            y: 0.0,
-            theta: 0.0,
-        },
-    )
-    .unwrap();
+    c.push_frame(BROADCAST, &BEACON).unwrap();
     c.outbox[0].len = 500;
     assert_eq!(w.validate(0, &c), Err("oversized radio frame"));
     let mut c = good;
-    c.push_frame(
-        42,
-        &RadioMsg::Beacon {
-            x: 0.0,
-            y: 0.0,
-            theta: 0.0,
-        },
-    )
-    .unwrap();
+    c.push_frame(42, &BEACON).unwrap();
     assert_eq!(w.validate(0, &c), Err("radio frame to an unknown robot"));
     assert_eq!(
         w.validate(1, &good),
@@ -347,15 +338,7 @@ fn same_seed_same_run_with_noise_and_loss() {
                     c.v = 0.3;
                     c.omega = 0.5;
                     c.lidar_on = 1;
-                    c.push_frame(
-                        BROADCAST,
-                        &RadioMsg::Beacon {
-                            x: 0.0,
-                            y: 0.0,
-                            theta: 0.0,
-                        },
-                    )
-                    .unwrap();
+                    c.push_frame(BROADCAST, &BEACON).unwrap();
                     Some(c)
                 })
                 .collect();
