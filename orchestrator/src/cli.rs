@@ -21,6 +21,14 @@ pub enum Cmd {
     Check(CheckArgs),
     /// Remove the iceoryx2 files and shared memory of runs whose orchestrator is gone.
     Clean,
+    /// Run a scenario over the cross product of varied keys and seeds; write sweep.csv and plots.
+    Sweep(crate::commands::sweep::SweepArgs),
+    /// Measure the IPC and the lock-step swarm against their alternatives.
+    #[command(subcommand)]
+    Bench(crate::commands::bench::BenchCmd),
+    /// Seeded fault fuzzing of the consensus cores.
+    #[command(subcommand)]
+    Fuzz(crate::commands::fuzz::FuzzCmd),
 }
 
 /// `swarm run`.

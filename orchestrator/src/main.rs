@@ -18,6 +18,9 @@ fn main() -> std::process::ExitCode {
         Cmd::Run(args) => commands::run::run(args, rx).map(|_| ()),
         Cmd::Check(args) => commands::check::check(args),
         Cmd::Clean => commands::clean::clean(),
+        Cmd::Sweep(args) => commands::sweep::sweep(args, rx),
+        Cmd::Bench(cmd) => commands::bench::bench(cmd),
+        Cmd::Fuzz(cmd) => commands::fuzz::fuzz(cmd),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

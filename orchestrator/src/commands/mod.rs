@@ -1,5 +1,8 @@
 //! One file per subcommand.
 
+pub mod bench;
 pub mod check;
 pub mod clean;
+pub mod fuzz;
 pub mod run;
+pub mod sweep;
