@@ -82,7 +82,8 @@ pub fn sibling_binary(name: &str) -> anyhow::Result<PathBuf> {
     )
 }
 
-fn child_command(bin: &Path) -> Command {
+/// A command for a child process: its own process group, SIGTERM when this process dies.
+pub fn child_command(bin: &Path) -> Command {
     let mut cmd = Command::new(bin);
     // Own process group: a terminal's Ctrl-C reaches only the orchestrator, which then stops
     // the run in order. If the orchestrator dies, the child gets SIGTERM and exits cleanly.
