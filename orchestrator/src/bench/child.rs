@@ -92,15 +92,15 @@ impl LossMode {
     /// What the mode configures, for the table.
     pub fn settings(self) -> &'static str {
         match self {
-            LossMode::Defaults => "buffer 2, safe overflow on; publisher never waits",
+            LossMode::Defaults => "buffer 2, safe overflow on; publisher paced, never waits",
             LossMode::RuntimeFree => {
-                "protocol::ipc observation service (buffer 1, safe overflow on); publisher never waits"
+                "protocol::ipc observation service (buffer 1, safe overflow on); publisher paced, never waits"
             }
             LossMode::RuntimeLockStep => {
                 "protocol::ipc services; one sample in flight, next after the reply (the runtime)"
             }
             LossMode::NoOverflow => {
-                "buffer 2, safe overflow off, publisher RetryUntilDelivered; publisher never waits"
+                "buffer 2, safe overflow off, publisher RetryUntilDelivered: paced, but blocks in send while the queue is full"
             }
         }
     }
@@ -165,6 +165,8 @@ pub enum ChildSpec {
         mode: LossMode,
         /// Samples to send.
         count: u64,
+        /// Microseconds between sends (free-running modes).
+        interval_us: u64,
     },
     /// World side of the message-path comparison (runtime services or raw iceoryx2).
     PathWorld {
@@ -275,7 +277,8 @@ pub fn main(args: &ChildArgs) -> SwarmResult<()> {
             run_id,
             mode,
             count,
-        } => super::loss::publisher(&run_of(run_id)?, *mode, *count),
+            interval_us,
+        } => super::loss::publisher(&run_of(run_id)?, *mode, *count, *interval_us),
         ChildSpec::PathWorld {
             run_id,
             runtime,

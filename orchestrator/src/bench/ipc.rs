@@ -28,6 +28,9 @@ use crate::error::{SwarmError, SwarmResult};
 pub const BASELINE: Transport = Transport::Iox2Listener;
 /// Simulated work per sample of the loss demonstration's slow subscriber.
 pub const LOSS_WORK_US: u64 = 20;
+/// Pause between the loss demonstration's sends: faster than the subscriber can go (its
+/// work plus a wake-up), slow enough that some samples get through.
+pub const LOSS_INTERVAL_US: u64 = 10;
 
 /// One transport at one payload size.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
@@ -424,6 +427,7 @@ fn measure_loss(
                     run_id: run.id().to_string(),
                     mode,
                     count,
+                    interval_us: LOSS_INTERVAL_US,
                 },
                 true,
             )?
@@ -577,7 +581,7 @@ pub fn table(r: &IpcReport) -> String {
     }
     let _ = writeln!(
         s,
-        "\nloss accounting: fast publisher, subscriber spending {LOSS_WORK_US} us per sample"
+        "\nloss accounting: publisher sending every {LOSS_INTERVAL_US} us, subscriber spending {LOSS_WORK_US} us per sample"
     );
     let _ = writeln!(
         s,

@@ -213,9 +213,15 @@ pub fn subscriber(run: &RunServices, mode: LossMode, work_us: u64) -> anyhow::Re
     Ok(())
 }
 
-/// The fast publisher: `count` samples (waiting for each answer only in lock-step mode),
-/// then the end marker; reports.
-pub fn publisher(run: &RunServices, mode: LossMode, count: u64) -> anyhow::Result<()> {
+/// The fast publisher: `count` samples `interval_us` apart (in lock-step mode: each after
+/// the previous one's answer), then the end marker; reports.
+pub fn publisher(
+    run: &RunServices,
+    mode: LossMode,
+    count: u64,
+    interval_us: u64,
+) -> anyhow::Result<()> {
+    let interval = Duration::from_micros(interval_us);
     let node = bench_node(run, "bench-loss-pub")?;
     let side = iox(
         side_event(&node, run)?.listener_builder().create(),
@@ -237,6 +243,7 @@ pub fn publisher(run: &RunServices, mode: LossMode, count: u64) -> anyhow::Resul
             for seq in 0..count {
                 iox(publisher.send_copy(LossMsg { seq, end: 0 }), "send")?;
                 iox(notifier.notify(), "notify")?;
+                spin_for(interval);
             }
             iox(publisher.send_copy(LossMsg { seq: count, end: 1 }), "send")?;
             iox(notifier.notify(), "notify")?;
@@ -261,6 +268,8 @@ pub fn publisher(run: &RunServices, mode: LossMode, count: u64) -> anyhow::Resul
                 send_observation(&publisher, &notifier, seq, false)?;
                 if mode == LossMode::RuntimeLockStep {
                     await_answer(&commands, &listener, seq)?;
+                } else {
+                    spin_for(interval);
                 }
             }
             send_observation(&publisher, &notifier, count, true)?;

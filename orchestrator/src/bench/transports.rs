@@ -43,6 +43,8 @@ const STOP: u32 = 5;
 
 /// Most round-trip samples kept (memory bound for very fast transports).
 const MAX_RTT_SAMPLES: usize = 2_000_000;
+/// Busy-poll: `sched_yield` after this many empty `receive()` calls.
+const POLL_YIELD_EVERY: u32 = 256;
 /// Subscriber queue of the iceoryx2 pairs (lossless: safe overflow off, sender retries).
 const IOX2_BUFFER: usize = 16;
 
@@ -258,8 +260,13 @@ impl Endpoint for Iox2Endpoint<'_> {
             match &mut self.wake {
                 Wake::Poll => {
                     spins = spins.wrapping_add(1);
-                    if spins.is_multiple_of(4096) && start.elapsed() > PEER_TIMEOUT {
-                        bail!("no message within {PEER_TIMEOUT:?}");
+                    if spins.is_multiple_of(POLL_YIELD_EVERY) {
+                        // Never sleeps, but lets a descheduled peer run on an
+                        // oversubscribed machine instead of spinning out a whole time slice.
+                        std::thread::yield_now();
+                        if start.elapsed() > PEER_TIMEOUT {
+                            bail!("no message within {PEER_TIMEOUT:?}");
+                        }
                     }
                     std::hint::spin_loop();
                 }
