@@ -9,7 +9,7 @@ use std::f64::consts::PI;
 use swarmrt_protocol::config::Config;
 use swarmrt_protocol::{
     BROADCAST, Command, CommandKind, Frame, MAX_INBOX, MAX_LIDAR_RAYS, MAX_NEIGHBOURS, MAX_OUTBOX,
-    MAX_PAYLOAD, Neighbour, Observation, PROTOCOL_VERSION, RobotState,
+    MAX_PAYLOAD, Neighbour, Note, Observation, PROTOCOL_VERSION, RobotState,
 };
 
 use crate::grid::Grid;
@@ -69,6 +69,15 @@ pub enum Event {
         robot: u32,
         /// Why (e.g. "process exited: signal 9").
         reason: String,
+    },
+    /// A robot's note about its own decisions (role, turn, consensus state).
+    Note {
+        /// Tick of the command that carried it.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+        /// What it said.
+        note: Note,
     },
     /// A robot sent a command the world refused (logged once per robot and reason).
     Rejected {
@@ -362,6 +371,7 @@ impl World {
         if cmd.outbox_len as usize > MAX_OUTBOX {
             return Err("outbox length out of range");
         }
+        cmd.notes()?;
         for f in cmd.outbox() {
             if f.len as usize > MAX_PAYLOAD {
                 return Err("oversized radio frame");
@@ -391,7 +401,17 @@ impl World {
             }
             if let Some(cmd) = &commands[i] {
                 match self.validate(i, cmd) {
-                    Ok(()) => accepted[i] = Some(cmd),
+                    Ok(()) => {
+                        accepted[i] = Some(cmd);
+                        // validate() decoded it once already; this cannot fail.
+                        for note in cmd.notes().unwrap_or_default() {
+                            self.events.push(Event::Note {
+                                tick,
+                                robot: i as u32,
+                                note,
+                            });
+                        }
+                    }
                     Err(reason) => self.reject(i as u32, reason),
                 }
             }
