@@ -366,6 +366,90 @@ impl Default for RadioConfig {
 pub enum BehaviourConfig {
     /// Go to the goal with reactive lidar avoidance and periodic pose beacons.
     Goto(GotoConfig),
+    /// Virtual-leader formation with three observer lidars and epsilon-greedy (seed 000).
+    Formation(FormationConfig),
+}
+
+/// Parameters of the virtual-leader formation (seed 000). The desired formation is the start
+/// layout (`robots.start`), centred on the virtual leader.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FormationConfig {
+    /// Constant linear speed v in m/s (section 4.1: only the heading changes).
+    #[serde(default = "default_formation_speed")]
+    pub speed: f64,
+    /// Turn angle w per step, degrees (the paper's "angle w": 1, 5, 10, 20).
+    #[serde(default = "default_turn_deg")]
+    pub turn_deg: f64,
+    /// An observer reports an obstacle when a ray of its cone hits closer than this (metres).
+    #[serde(default = "default_detect_range")]
+    pub detect_range: f64,
+    /// Half-width of each observer's lidar cone, degrees.
+    #[serde(default = "default_cone_deg")]
+    pub cone_deg: f64,
+    /// How far the side observers' cones point outward, degrees ("slightly to either side").
+    #[serde(default = "default_side_offset_deg")]
+    pub side_offset_deg: f64,
+    /// Epsilon-greedy probability of the opposite turn when an obstacle is seen (0.1 %).
+    #[serde(default = "default_epsilon_obstacle")]
+    pub epsilon_obstacle: f64,
+    /// Epsilon-greedy probability of the opposite turn when nothing is seen (1 %).
+    #[serde(default = "default_epsilon_clear")]
+    pub epsilon_clear: f64,
+    /// How far ahead of its slot, along the swarm heading, a robot steers (metres).
+    #[serde(default = "one")]
+    pub lookahead: f64,
+    /// A neighbour whose last beacon is older than this many ticks is left out (down or gone).
+    #[serde(default = "default_stale_ticks")]
+    pub stale_ticks: u32,
+    /// An observer's lidar verdict counts for this many ticks after it was sent.
+    #[serde(default = "default_verdict_ticks")]
+    pub verdict_ticks: u32,
+}
+
+impl Default for FormationConfig {
+    fn default() -> Self {
+        FormationConfig {
+            speed: default_formation_speed(),
+            turn_deg: default_turn_deg(),
+            detect_range: default_detect_range(),
+            cone_deg: default_cone_deg(),
+            side_offset_deg: default_side_offset_deg(),
+            epsilon_obstacle: default_epsilon_obstacle(),
+            epsilon_clear: default_epsilon_clear(),
+            lookahead: one(),
+            stale_ticks: default_stale_ticks(),
+            verdict_ticks: default_verdict_ticks(),
+        }
+    }
+}
+
+fn default_formation_speed() -> f64 {
+    0.5
+}
+fn default_turn_deg() -> f64 {
+    5.0
+}
+fn default_detect_range() -> f64 {
+    2.0
+}
+fn default_cone_deg() -> f64 {
+    25.0
+}
+fn default_side_offset_deg() -> f64 {
+    20.0
+}
+fn default_epsilon_obstacle() -> f64 {
+    0.001
+}
+fn default_epsilon_clear() -> f64 {
+    0.01
+}
+fn default_stale_ticks() -> u32 {
+    20
+}
+fn default_verdict_ticks() -> u32 {
+    3
 }
 
 impl Default for BehaviourConfig {
@@ -654,6 +738,24 @@ impl Config {
                     1_000_000,
                 )?;
                 range_f("behaviour.slot_spacing", g.slot_spacing, 0.0, 1e6)?;
+            }
+            BehaviourConfig::Formation(f) => {
+                range_f("behaviour.speed", f.speed, 0.0, self.robots.max_speed)?;
+                let max_turn = (self.robots.max_turn_rate * self.scenario.dt).to_degrees();
+                range_f("behaviour.turn_deg", f.turn_deg, 0.0, max_turn.min(180.0))?;
+                range_f("behaviour.detect_range", f.detect_range, 0.0, 1e6)?;
+                range_f("behaviour.cone_deg", f.cone_deg, 0.0, 180.0)?;
+                range_f("behaviour.side_offset_deg", f.side_offset_deg, -90.0, 90.0)?;
+                range_f("behaviour.epsilon_obstacle", f.epsilon_obstacle, 0.0, 1.0)?;
+                range_f("behaviour.epsilon_clear", f.epsilon_clear, 0.0, 1.0)?;
+                range_f("behaviour.lookahead", f.lookahead, 0.0, 1e6)?;
+                range_u64("behaviour.stale_ticks", f.stale_ticks as u64, 1, 1_000_000)?;
+                range_u64(
+                    "behaviour.verdict_ticks",
+                    f.verdict_ticks as u64,
+                    1,
+                    1_000_000,
+                )?;
             }
         }
 

@@ -28,6 +28,7 @@ pub mod logging;
 pub mod messages;
 pub mod radio_msg;
 pub mod report;
+pub mod rng;
 pub mod services;
 
 pub use messages::*;

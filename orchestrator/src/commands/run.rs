@@ -127,6 +127,10 @@ pub fn run(
             metrics["ticks"] = json!(recorded_ticks(&dir));
         }
     }
+    match crate::metrics::from_records(&cfg, &dir) {
+        Ok(m) => merge(&mut metrics, m),
+        Err(e) => tracing::warn!("could not compute metrics from the records: {e:#}"),
+    }
     run_dir::write_metrics(&dir, &metrics)?;
     if let Err(e) = run_dir::write_plots(&dir, &cfg) {
         tracing::warn!("could not draw the trajectory plot: {e:#}");
