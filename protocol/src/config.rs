@@ -587,12 +587,19 @@ impl Config {
                 message,
             })?;
         }
+        let behaviour = table.get("behaviour").cloned();
         let config: Config =
             serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+                let key = e.path().to_string().trim_start_matches('.').to_string();
+                // serde buffers a tagged enum, which hides the field's path: find it again.
+                let (key, message) = match behaviour.as_ref().filter(|_| key == "behaviour") {
+                    Some(b) => behaviour_error(b).unwrap_or((key, e.inner().to_string())),
+                    None => (key, e.inner().to_string()),
+                };
                 ConfigError {
                     file: file.to_string(),
-                    key: e.path().to_string().trim_start_matches('.').to_string(),
-                    message: one_line(&e.inner().to_string()),
+                    key,
+                    message: one_line(&message),
                 }
             })?;
         config.validate().map_err(|(key, message)| ConfigError {
@@ -850,6 +857,26 @@ fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
+/// Re-reads a `[behaviour]` table that failed as the struct its `kind` names, to report the
+/// failing field as `behaviour.<field>`.
+fn behaviour_error(b: &toml::Value) -> Option<(String, String)> {
+    let mut fields = b.as_table()?.clone();
+    let kind = fields.remove("kind")?;
+    let fields = toml::Value::Table(fields);
+    let err = match kind.as_str()? {
+        "goto" => serde_path_to_error::deserialize::<_, GotoConfig>(fields).err()?,
+        "formation" => serde_path_to_error::deserialize::<_, FormationConfig>(fields).err()?,
+        _ => return None,
+    };
+    let path = err.path().to_string();
+    let key = if path.is_empty() || path == "." {
+        "behaviour".to_string()
+    } else {
+        format!("behaviour.{}", path.trim_start_matches('.'))
+    };
+    Some((key, err.inner().to_string()))
+}
+
 fn check(ok: bool, key: &str, expected: &str) -> Result<(), (String, String)> {
     if ok {
         Ok(())
@@ -1038,5 +1065,27 @@ count = 4
         assert_eq!(c.start_positions(|_, _| true), None);
         let c = load(MINIMAL, &["robots.count=100"]).unwrap();
         assert_eq!(c.start_positions(|_, _| true).unwrap().len(), 100);
+    }
+
+    #[test]
+    fn a_bad_behaviour_field_is_named_despite_the_tagged_enum() {
+        let e = load(
+            MINIMAL,
+            &["behaviour.kind=\"formation\"", "behaviour.turn_deg=\"x\""],
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "behaviour.turn_deg", "{e}");
+        let e = load(
+            MINIMAL,
+            &["behaviour.kind=\"formation\"", "behaviour.turn_dg=1"],
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "behaviour.turn_dg", "{e}");
+        let e = load(
+            MINIMAL,
+            &["behaviour.kind=\"formation\"", "behaviour.speed=50"],
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "behaviour.speed", "{e}");
     }
 }
