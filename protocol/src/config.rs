@@ -49,6 +49,9 @@ pub struct Config {
     /// Which behaviour every robot runs.
     #[serde(default)]
     pub behaviour: BehaviourConfig,
+    /// Scheduled faults.
+    #[serde(default)]
+    pub faults: crate::faults::FaultsConfig,
 }
 
 /// `[scenario]`.
@@ -733,6 +736,8 @@ impl Config {
         range_u64("radio.delay_ticks", q.delay_ticks as u64, 0, 10_000)?;
         range_u64("radio.jitter_ticks", q.jitter_ticks as u64, 0, 10_000)?;
         range_u64("radio.capacity", q.capacity as u64, 1, MAX_OUTBOX as u64)?;
+
+        self.faults.validate(self.robots.count)?;
 
         match &self.behaviour {
             BehaviourConfig::Goto(g) => {

@@ -12,3 +12,10 @@ pub enum ConsensusNote {
         term: u64,
     },
 }
+
+impl ConsensusNote {
+    /// True when the robot says it is the leader now.
+    pub fn claims_leadership(&self) -> bool {
+        matches!(self, ConsensusNote::Leader { .. })
+    }
+}

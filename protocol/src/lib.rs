@@ -23,6 +23,7 @@ pub mod child;
 pub mod config;
 pub mod consensus;
 pub mod control;
+pub mod faults;
 pub mod ipc;
 pub mod logging;
 pub mod messages;
