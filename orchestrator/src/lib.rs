@@ -10,3 +10,4 @@ pub mod in_process;
 pub mod plot;
 pub mod processes;
 pub mod run_dir;
+pub mod sweep;
