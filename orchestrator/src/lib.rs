@@ -11,3 +11,4 @@ pub mod metrics;
 pub mod plot;
 pub mod processes;
 pub mod run_dir;
+pub mod sweep;

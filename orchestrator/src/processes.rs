@@ -82,7 +82,10 @@ pub fn sibling_binary(name: &str) -> anyhow::Result<PathBuf> {
     )
 }
 
-fn child_command(bin: &Path) -> Command {
+/// A command for a child of this orchestrator: its own process group, SIGTERM if the
+/// spawning thread dies. The spawning thread must outlive the child (`PR_SET_PDEATHSIG` follows
+/// the thread, not the process).
+pub fn child_command(bin: &Path) -> Command {
     let mut cmd = Command::new(bin);
     // Own process group: a terminal's Ctrl-C reaches only the orchestrator, which then stops
     // the run in order. If the orchestrator dies, the child gets SIGTERM and exits cleanly.
