@@ -11,6 +11,14 @@ const LOOP_RADIUS: f64 = 1.0;
 /// ... after travelling at least this many times that distance in between.
 const LOOP_PATH: f64 = 4.0;
 
+/// The metrics [`metrics`] computes.
+pub const NAMES: [&str; 4] = [
+    "formation_error_rms",
+    "loops_detected",
+    "loop_ticks",
+    "epsilon_flips",
+];
+
 /// `formation_error_rms`, `loops_detected`, `loop_ticks`, `epsilon_flips`.
 pub fn metrics(cfg: &Config, rec: &Records) -> Value {
     let offsets = offsets(cfg);

@@ -10,6 +10,15 @@ use std::path::Path;
 use serde_json::{Value, json};
 use swarmrt_protocol::config::{BehaviourConfig, Config};
 
+/// Names of the metrics [`from_records`] adds for this scenario (for checking `--metric`).
+pub fn names(cfg: &Config) -> Vec<&'static str> {
+    let mut names = vec!["steps_to_target", "energy_saving", "robots_lost"];
+    if let BehaviourConfig::Formation(_) = &cfg.behaviour {
+        names.extend(formation::NAMES);
+    }
+    names
+}
+
 /// Metrics every run gets, plus the behaviour's own, as a JSON object to merge into
 /// metrics.json.
 pub fn from_records(cfg: &Config, dir: &Path) -> anyhow::Result<Value> {
