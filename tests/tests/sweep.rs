@@ -637,3 +637,74 @@ fn sweep_rows_match_single_runs() {
     let seeds: BTreeSet<&str> = rows.iter().map(|r| r[1].as_str()).collect();
     assert_eq!(seeds, BTreeSet::from(["5", "6"]));
 }
+
+#[test]
+fn a_crashed_run_is_a_failed_row_the_sweep_fails_and_resume_runs_it_again() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("sweep");
+    let args: Vec<String> = [
+        "sweep",
+        "configs/goto_simple.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--vary",
+        "scenario.ticks=50,900",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let mut child = Command::new(swarm_bin())
+        .current_dir(workspace())
+        .args(&args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    wait_until("the first row", LIMIT, || {
+        assert_running(&mut child);
+        std::fs::read_to_string(out.join("sweep.csv")).is_ok_and(|t| t.lines().count() >= 2)
+    });
+    // SIGKILL the world of the second (long) run.
+    let mut world = None;
+    wait_until("the second run's world", LIMIT, || {
+        assert_running(&mut child);
+        world = children_of(pid)
+            .iter()
+            .flat_map(|(p, _)| children_of(*p as u32))
+            .find(|(_, c)| c.contains("swarm-world"))
+            .map(|(p, _)| p);
+        world.is_some()
+    });
+    unsafe {
+        libc::kill(world.unwrap(), libc::SIGKILL);
+    }
+    let result = wait_with_watchdog(child, LIMIT);
+    assert_eq!(result.status.code(), Some(1), "{result:?}");
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert!(err.contains("1 of 2 runs failed"), "{err}");
+
+    let (header, rows) = read_csv(&out);
+    assert_eq!(rows.len(), 2);
+    let failed = col(&header, "failed");
+    let by_ticks: BTreeMap<&str, &Vec<String>> = rows.iter().map(|r| (r[0].as_str(), r)).collect();
+    assert_eq!(by_ticks["50"][failed], "false");
+    assert_eq!(by_ticks["900"][failed], "true");
+    let m = metrics(&run_dir(&out, &header, by_ticks["900"]));
+    assert_eq!(m["failed"], true, "{m}");
+    // The summary counts it and leaves it out of the means.
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("(1 finished, 1 failed)"), "{md}");
+
+    // The same command runs the failed run again, and only that one.
+    mark_runs(&out);
+    assert_ok(&run_sweep(&args));
+    let (_, rows) = read_csv(&out);
+    assert_eq!(rows.len(), 2);
+    assert!(rows.iter().all(|r| r[failed] == "false"), "{rows:?}");
+    assert_eq!(
+        ran_again(&out),
+        BTreeSet::from(["runs/scenario.ticks=900_s1".to_string()])
+    );
+}
