@@ -54,7 +54,9 @@ fn assert_nothing_left(v: &serde_json::Value) {
 }
 
 fn positive(v: &serde_json::Value, what: &str) {
-    let x = v.as_f64().unwrap_or_else(|| panic!("{what} is not a number: {v}"));
+    let x = v
+        .as_f64()
+        .unwrap_or_else(|| panic!("{what} is not a number: {v}"));
     assert!(x > 0.0, "{what} = {x}");
 }
 
@@ -136,7 +138,10 @@ fn bench_ipc_reports_every_transport_and_the_runtime_loses_nothing() {
     let lock_step = row("runtime-lock-step");
     assert!(lock_step["error"].is_null(), "{lock_step}");
     assert!(lock_step["sent"].as_u64().unwrap() > 0);
-    assert_eq!(lock_step["dropped"], 0, "the runtime's settings drop nothing: {lock_step}");
+    assert_eq!(
+        lock_step["dropped"], 0,
+        "the runtime's settings drop nothing: {lock_step}"
+    );
     assert_eq!(lock_step["received"], lock_step["sent"]);
     assert_eq!(lock_step["gaps"], 0);
 
@@ -194,7 +199,12 @@ fn bench_swarm_reports_runtime_floor_and_in_process_and_cleans_up() {
     assert_eq!(ip["agents"], 20);
     positive(&ip["robot_steps_per_s"], "in-process robot-steps/s");
 
-    for f in ["results.json", "swarm.svg", "swarm.png", "runs/n3/trajectory.csv"] {
+    for f in [
+        "results.json",
+        "swarm.svg",
+        "swarm.png",
+        "runs/n3/trajectory.csv",
+    ] {
         assert!(out_dir.join(f).exists(), "{f} written");
     }
     assert_nothing_left(&v);
