@@ -8,6 +8,8 @@ pub mod cli;
 pub mod commands;
 pub mod error;
 pub mod in_process;
+pub mod metrics;
 pub mod plot;
 pub mod processes;
 pub mod run_dir;
+pub mod sweep;

@@ -32,6 +32,7 @@ fn main() -> std::process::ExitCode {
             match &e {
                 SwarmError::User(msg) => eprintln!("error: {msg}"),
                 SwarmError::Internal(err) => eprintln!("error: {err:#}"),
+                SwarmError::Interrupted(msg) => eprintln!("{msg}"),
             }
             std::process::ExitCode::from(e.exit_code())
         }

@@ -192,6 +192,9 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
     let events = world.drain_events();
     recorder.record(world.tick(), world.robots(), &events)?;
     while !interrupted && !world.finished() {
+        for robot in world.take_kills() {
+            report(&Report::Kill { robot });
+        }
         let tick = world.tick();
         let t0 = Instant::now();
         world.observe(&mut obs);
