@@ -1,6 +1,7 @@
 //! The agent core: decodes the radio inbox, keeps what beacons told it, runs the behaviour.
 
 use std::collections::BTreeMap;
+use std::collections::btree_map::Entry;
 use swarmrt_protocol::config::{BehaviourConfig, Config};
 use swarmrt_protocol::{Command, Observation, RadioMsg, RobotState};
 
@@ -79,20 +80,22 @@ impl Agent {
             match RadioMsg::decode(f.bytes()) {
                 Some(msg) => {
                     if let RadioMsg::Beacon { x, y, theta } = msg {
-                        let newer = self
-                            .beacons
-                            .get(&f.src)
-                            .is_none_or(|b| b.sent_tick <= f.sent_tick);
-                        if newer {
-                            self.beacons.insert(
-                                f.src,
-                                BeaconInfo {
-                                    sent_tick: f.sent_tick,
-                                    x,
-                                    y,
-                                    theta,
-                                },
-                            );
+                        let heard = BeaconInfo {
+                            sent_tick: f.sent_tick,
+                            x,
+                            y,
+                            theta,
+                        };
+                        // One lookup per beacon (a 1,000-robot tick decodes ~35,000).
+                        match self.beacons.entry(f.src) {
+                            Entry::Vacant(v) => {
+                                v.insert(heard);
+                            }
+                            Entry::Occupied(mut o) => {
+                                if o.get().sent_tick <= f.sent_tick {
+                                    o.insert(heard);
+                                }
+                            }
                         }
                     }
                     self.inbox.push(Decoded {

@@ -123,10 +123,14 @@ impl RadioStats {
 }
 
 /// A copy in flight, ordered so that a `BinaryHeap` pops the smallest (`due`, `seq`) first.
+/// The frame itself waits in [`RadioMedium::frames`] at `slot`, once for all copies of it
+/// (every copy of a broadcast is the same bytes): heap operations move 24 bytes instead of a
+/// whole frame, and delivery reads a few hot frames instead of one cold copy per receiver
+/// (together a third of a 1,000-robot tick before).
 struct Pending {
     due: u64,
     seq: u64,
-    frame: Frame,
+    slot: u32,
 }
 
 impl PartialEq for Pending {
@@ -238,6 +242,11 @@ pub struct RadioMedium {
     robot_count: usize,
     /// In-flight copies per receiver.
     queues: Vec<BinaryHeap<Pending>>,
+    /// Frames of the in-flight copies, indexed by [`Pending::slot`], with how many copies
+    /// in flight still refer to each.
+    frames: Vec<(Frame, u32)>,
+    /// Free slots of `frames`.
+    free: Vec<u32>,
     /// Routing sequence of the next copy put in flight.
     seq: u64,
     /// Directed links (src, dst) currently in the Gilbert-Elliott Bad state; absent = Good.
@@ -257,6 +266,8 @@ impl RadioMedium {
             rng: rng::stream(seed, "radio", 0),
             robot_count,
             queues: (0..robot_count).map(|_| BinaryHeap::new()).collect(),
+            frames: Vec::new(),
+            free: Vec::new(),
             seq: 0,
             bad_links: BTreeSet::new(),
             grid: Grid::default(),
@@ -316,6 +327,8 @@ impl RadioMedium {
                 let mut copy = *frame;
                 copy.src = src as u32;
                 copy.sent_tick = tick;
+                // Stored on the first copy that goes in flight.
+                let mut slot = None;
                 if copy.dst == BROADCAST {
                     if !receivers_known {
                         self.grid.receivers(src, positions, range, &mut receivers);
@@ -323,7 +336,7 @@ impl RadioMedium {
                     }
                     for &dst in &receivers {
                         self.stats.sent += 1;
-                        self.route(tick, src, dst as usize, copy, blocked);
+                        self.route(tick, src, dst as usize, &copy, &mut slot, blocked);
                     }
                 } else {
                     self.stats.sent += 1;
@@ -336,7 +349,7 @@ impl RadioMedium {
                     {
                         self.stats.count_drop(Reason::OutOfRange);
                     } else {
-                        self.route(tick, src, dst, copy, blocked);
+                        self.route(tick, src, dst, &copy, &mut slot, blocked);
                     }
                 }
             }
@@ -350,7 +363,8 @@ impl RadioMedium {
         tick: u64,
         src: usize,
         dst: usize,
-        copy: Frame,
+        copy: &Frame,
+        slot: &mut Option<u32>,
         blocked: &mut dyn FnMut(usize, usize) -> bool,
     ) {
         if self
@@ -378,10 +392,21 @@ impl RadioMedium {
             .saturating_add(1)
             .saturating_add(self.cfg.delay_ticks as u64)
             .saturating_add(jitter);
+        let slot = *slot.get_or_insert_with(|| match self.free.pop() {
+            Some(free) => {
+                self.frames[free as usize] = (*copy, 0);
+                free
+            }
+            None => {
+                self.frames.push((*copy, 0));
+                (self.frames.len() - 1) as u32
+            }
+        });
+        self.frames[slot as usize].1 += 1;
         self.queues[dst].push(Pending {
             due,
             seq: self.seq,
-            frame: copy,
+            slot,
         });
         self.seq += 1;
         self.stats.in_flight += 1;
@@ -436,11 +461,16 @@ impl RadioMedium {
             let queue = &mut self.queues[r];
             while queue.peek().is_some_and(|p| p.due <= tick) {
                 let Some(p) = queue.pop() else { break };
+                let (frame, refs) = &mut self.frames[p.slot as usize];
+                *refs -= 1;
+                if *refs == 0 {
+                    self.free.push(p.slot);
+                }
                 self.stats.in_flight -= 1;
                 if !can_talk[r] {
                     self.stats.count_drop(Reason::ReceiverDown);
                 } else if inbox.len() < MAX_INBOX {
-                    inbox.push(p.frame);
+                    inbox.push(*frame);
                     self.stats.delivered += 1;
                 } else {
                     self.stats.count_drop(Reason::InboxFull);

@@ -281,10 +281,16 @@ impl World {
         let lidar = self.cfg.robots.lidar;
         let rb_range = self.cfg.robots.range_bearing.range;
         let radius = self.cfg.robots.radius;
-        let grid = Grid::build(&positions, lidar.range.max(rb_range).max(4.0 * radius));
+        // One neighbour query per robot serves the lidar (bodies within range + radius) and
+        // range-and-bearing. Cells about a third of that reach keep the candidates close to
+        // the disc (results do not depend on the cell size: candidates are filtered by
+        // distance and sorted).
+        let reach = (lidar.range + radius).max(rb_range);
+        let grid = Grid::build(&positions, (reach / 3.0).max(4.0 * radius));
         let noise = self.cfg.robots.noise;
         let goal = self.cfg.map.goal;
         let goal_sensor = self.cfg.robots.goal_sensor;
+        // Other robots within `reach`: (centre distance, id), nearest first.
         let mut near: Vec<(f64, u32)> = Vec::new();
         for (i, o) in out.iter_mut().enumerate() {
             let r = &self.robots[i];
@@ -298,24 +304,37 @@ impl World {
             if r.state != RobotState::Active {
                 continue;
             }
+            near.clear();
+            grid.near((r.x, r.y), reach, |j| {
+                if j != i {
+                    let q = &self.robots[j];
+                    let d = ((q.x - r.x).powi(2) + (q.y - r.y).powi(2)).sqrt();
+                    if d <= reach {
+                        near.push((d, j as u32));
+                    }
+                }
+            });
+            near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             if r.lidar_on {
                 let rays = (lidar.rays as usize).min(MAX_LIDAR_RAYS);
-                // Other robots' bodies within lidar range are obstacles too.
-                near.clear();
-                grid.near((r.x, r.y), lidar.range + radius, |j| {
-                    if j != i {
-                        near.push((0.0, j as u32));
-                    }
-                });
+                // Other robots' bodies (in any state) are obstacles too. A ray stops looking
+                // once a body's nearest point lies beyond its best hit.
                 for k in 0..rays {
                     let angle = r.theta + lidar.ray_angle(k);
+                    let dir = (angle.cos(), angle.sin());
                     let mut d = self
                         .map
                         .cast((r.x, r.y), angle, lidar.range)
                         .unwrap_or(lidar.range);
-                    for &(_, j) in &near {
+                    for &(dc, j) in &near {
+                        // Any hit on this body is at least dc - radius away (exact to far
+                        // below the margin), so neither it nor a farther body can lower d;
+                        // d is a minimum, so the order of the bodies does not change it.
+                        if dc - radius > d + LIDAR_SKIP_MARGIN {
+                            break;
+                        }
                         let q = &self.robots[j as usize];
-                        if let Some(t) = ray_circle((r.x, r.y), angle, (q.x, q.y), radius) {
+                        if let Some(t) = ray_circle((r.x, r.y), dir, (q.x, q.y), radius) {
                             d = d.min(t);
                         }
                     }
@@ -325,26 +344,23 @@ impl World {
                 o.lidar_len = rays as u16;
             }
             // Range-and-bearing: other robots with their emitter on, nearest first.
-            near.clear();
-            grid.near((r.x, r.y), rb_range, |j| {
-                let q = &self.robots[j];
-                if j != i && q.state == RobotState::Active {
-                    let d = ((q.x - r.x).powi(2) + (q.y - r.y).powi(2)).sqrt();
-                    if d <= rb_range {
-                        near.push((d, j as u32));
-                    }
+            let mut seen = 0;
+            for &(d, j) in &near {
+                if seen == MAX_NEIGHBOURS || d > rb_range {
+                    break;
                 }
-            });
-            near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            for (slot, &(d, j)) in near.iter().take(MAX_NEIGHBOURS).enumerate() {
                 let q = &self.robots[j as usize];
-                o.neighbours[slot] = Neighbour {
+                if q.state != RobotState::Active {
+                    continue;
+                }
+                o.neighbours[seen] = Neighbour {
                     id: j,
                     range: d,
                     bearing: wrap_angle((q.y - r.y).atan2(q.x - r.x) - r.theta),
                 };
+                seen += 1;
             }
-            o.neighbours_len = near.len().min(MAX_NEIGHBOURS) as u16;
+            o.neighbours_len = seen as u16;
             let gd = ((goal.x - r.x).powi(2) + (goal.y - r.y).powi(2)).sqrt();
             let gb = wrap_angle((goal.y - r.y).atan2(goal.x - r.x) - r.theta);
             if gd <= goal_sensor.range && gb.abs() <= goal_sensor.fov_deg.to_radians() / 2.0 {
@@ -649,9 +665,14 @@ fn gauss(rng: &mut Rng, sd: f64) -> f64 {
     }
 }
 
-/// Distance along the ray from `o` at `angle` to the circle (`c`, `r`), if it hits ahead.
-fn ray_circle(o: (f64, f64), angle: f64, c: (f64, f64), r: f64) -> Option<f64> {
-    let (dx, dy) = (angle.cos(), angle.sin());
+/// Metres a robot body's nearest point must lie beyond a ray's best hit before the ray stops
+/// testing bodies (rounding in `ray_circle` is ~1e-15 m at these distances).
+const LIDAR_SKIP_MARGIN: f64 = 1e-9;
+
+/// Distance along the ray from `o` in unit direction `dir` (cos, sin of its angle) to the
+/// circle (`c`, `r`), if it hits ahead.
+fn ray_circle(o: (f64, f64), dir: (f64, f64), c: (f64, f64), r: f64) -> Option<f64> {
+    let (dx, dy) = dir;
     let (fx, fy) = (o.0 - c.0, o.1 - c.1);
     let b = fx * dx + fy * dy;
     let cc = fx * fx + fy * fy - r * r;

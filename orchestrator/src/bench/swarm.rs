@@ -103,6 +103,11 @@ pub struct InProcessRow {
     pub secs: f64,
     /// agents * ticks / secs.
     pub robot_steps_per_s: f64,
+    /// CPU seconds this thread spent stepping (less than `secs` when other processes
+    /// took the CPU: a shared machine).
+    pub cpu_secs: f64,
+    /// agents * ticks / cpu_secs: what one otherwise idle core would do.
+    pub robot_steps_per_cpu_s: f64,
     /// Mean ms per tick in `World::observe`.
     pub observe_ms: f64,
     /// Mean ms per tick in all `Agent::step` calls.
@@ -415,6 +420,19 @@ fn floor_run(n: u32, ticks: u64, interrupt: &Interrupt, run_ids: &mut Vec<String
     row
 }
 
+/// CPU time of the calling thread, seconds.
+fn thread_cpu_secs() -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime only writes the struct we pass.
+    unsafe {
+        libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts);
+    }
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+}
+
 /// The same cores in one thread, no IPC and no records: observe, every agent's step, step.
 fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRow> {
     let n = cfg.robots.count as usize;
@@ -426,6 +444,7 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
     let mut commands = Vec::with_capacity(n);
     let (mut observe, mut think, mut step) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
     let start = Instant::now();
+    let cpu_start = thread_cpu_secs();
     let mut ticks = 0u64;
     while ticks < cfg.scenario.ticks && start.elapsed() < IN_PROCESS_BUDGET {
         interrupt.check()?;
@@ -444,6 +463,7 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
         ticks += 1;
     }
     let secs = start.elapsed().as_secs_f64();
+    let cpu_secs = thread_cpu_secs() - cpu_start;
     let per = |d: Duration| d.as_secs_f64() * 1e3 / ticks.max(1) as f64;
     Ok(InProcessRow {
         agents: n as u32,
@@ -451,6 +471,8 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
         setup_secs,
         secs,
         robot_steps_per_s: (n as f64 * ticks as f64) / secs,
+        cpu_secs,
+        robot_steps_per_cpu_s: (n as f64 * ticks as f64) / cpu_secs,
         observe_ms: per(observe),
         agents_ms: per(think),
         step_ms: per(step),
@@ -560,8 +582,16 @@ pub fn table(r: &SwarmReport) -> String {
     );
     let _ = writeln!(
         s,
-        "{:>6} {:>6} {:>12} {:>9} {:>9} {:>9} {:>12} {:>8}",
-        "N", "ticks", "robot-steps/s", "observe", "agents", "step", "radio/tick", "setup"
+        "{:>6} {:>6} {:>13} {:>13} {:>9} {:>9} {:>9} {:>12} {:>8}",
+        "N",
+        "ticks",
+        "robot-steps/s",
+        "per CPU-s",
+        "observe",
+        "agents",
+        "step",
+        "radio/tick",
+        "setup"
     );
     for p in &r.in_process {
         if let Some(e) = &p.error {
@@ -570,10 +600,11 @@ pub fn table(r: &SwarmReport) -> String {
         }
         let _ = writeln!(
             s,
-            "{:>6} {:>6} {:>12} {:>9} {:>9} {:>9} {:>12} {:>8}",
+            "{:>6} {:>6} {:>13} {:>13} {:>9} {:>9} {:>9} {:>12} {:>8}",
             p.agents,
             p.ticks,
             fmt_rate(p.robot_steps_per_s),
+            fmt_rate(p.robot_steps_per_cpu_s),
             ms(p.observe_ms),
             ms(p.agents_ms),
             ms(p.step_ms),
