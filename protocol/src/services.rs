@@ -6,7 +6,12 @@
 use std::path::PathBuf;
 
 /// The directory under which every run keeps its iceoryx2 files (one sub-directory per run).
-pub const IPC_BASE_DIR: &str = "/tmp/iceoryx2/swarmrt";
+///
+/// On tmpfs, beside the shared memory: iceoryx2 creates and removes a handful of files per
+/// node and port, and on the ext4 `/tmp` of the benchmark machine inode allocation among
+/// recently deleted inodes made each robot's node take 50-700 ms to create under load; 500
+/// robots took 7.6 s to start there and 0.8 s here (docs/benchmarks.md).
+pub const IPC_BASE_DIR: &str = "/dev/shm/swarmrt-iceoryx2";
 /// Directory where POSIX shared memory segments appear on Linux.
 pub const SHM_DIR: &str = "/dev/shm";
 /// Event id a robot uses on the command event after publishing a command.
