@@ -223,3 +223,57 @@ fn bench_refuses_bad_arguments_with_one_line() {
         assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
     }
 }
+
+#[test]
+fn ctrl_c_stops_a_bench_and_leaves_nothing() {
+    use std::process::{Command, Stdio};
+    let tmp = tempfile::tempdir().unwrap();
+    let child = Command::new(swarmrt_tests::swarm_bin())
+        .current_dir(swarmrt_tests::workspace())
+        .args([
+            "bench",
+            "ipc",
+            "--secs",
+            "30",
+            "--payload",
+            "64",
+            "--fanout",
+            "1",
+            "--out",
+            tmp.path().join("ipc").to_str().unwrap(),
+        ])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let pid = child.id();
+    // Wait until a measurement's processes run, and note their run id.
+    let mut ids = Vec::new();
+    swarmrt_tests::wait_until("a bench child", Duration::from_secs(60), || {
+        for (_, cmd) in swarmrt_tests::children_of(pid) {
+            if let Some(rest) = cmd.split("\"run_id\":\"").nth(1)
+                && let Some(id) = rest.split('"').next()
+                && !ids.iter().any(|x: &String| x == id)
+            {
+                ids.push(id.to_string());
+            }
+        }
+        !ids.is_empty()
+    });
+    let children = swarmrt_tests::children_of(pid);
+    unsafe {
+        libc::kill(pid as i32, libc::SIGINT);
+    }
+    let out = swarmrt_tests::wait_with_watchdog(child, LIMIT);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    for (p, cmd) in &children {
+        assert!(!swarmrt_tests::alive(*p), "left running: {cmd}");
+    }
+    for id in &ids {
+        assert!(leftovers(id).is_empty(), "{id}: {:?}", leftovers(id));
+    }
+    assert!(processes_of(&ids).is_empty());
+}

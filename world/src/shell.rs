@@ -27,6 +27,10 @@ use crate::world::World;
 const STARTUP_TIMEOUT: Duration = Duration::from_secs(120);
 /// Minimum interval between progress reports on stdout.
 const PROGRESS_EVERY: Duration = Duration::from_millis(200);
+/// The first ticks are each reported at once, so the orchestrator knows exactly when every
+/// process is up and the observation samples have all been used once (`swarm bench swarm`
+/// reads memory then).
+pub const EARLY_REPORTS: u64 = 32;
 
 /// Numbers only the shell knows (wall-clock dependent, so kept out of the replayable records).
 #[derive(Debug, Default, serde::Serialize)]
@@ -185,9 +189,6 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
     let mut obs = vec![Observation::empty(0, 0); n];
     let mut commands: Vec<Option<Command>> = vec![None; n];
     let mut last_progress = Instant::now();
-    // The first tick is reported at once: the orchestrator learns that every process is up
-    // and ticking (`swarm bench swarm` reads memory then).
-    let mut first_report = true;
     let mut timer = TickTimer::default();
     let events = world.drain_events();
     recorder.record(world.tick(), world.robots(), &events)?;
@@ -277,8 +278,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
             step: ns(t3, t4),
             record: ns(t4, t5),
         });
-        if first_report || last_progress.elapsed() >= PROGRESS_EVERY {
-            first_report = false;
+        if world.tick() <= EARLY_REPORTS || last_progress.elapsed() >= PROGRESS_EVERY {
             last_progress = Instant::now();
             report(&Report::Tick { tick: world.tick() });
         }

@@ -14,7 +14,7 @@ use super::fanout::FanoutResult;
 use super::loss::{PubResult, SubResult};
 use super::plot::{Panel, Series, write_figure};
 use super::procs::{Children, Memory, memory};
-use super::stats::Summary;
+use super::stats::{Summary, summarize};
 use super::transports::{MIN_PAYLOAD, PATH_REPLY, PATH_REQUEST, PingResult, crossbeam_pair};
 use super::{
     BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_ns, fmt_rate, machine,
@@ -144,7 +144,7 @@ fn user(msg: String) -> SwarmError {
 }
 
 /// `swarm bench ipc`.
-pub fn run(args: &IpcArgs, interrupt: crossbeam_channel::Receiver<()>) -> SwarmResult<()> {
+pub fn run(args: &IpcArgs, interrupt: &Interrupt) -> SwarmResult<()> {
     if args.payload.is_empty() || args.payload.iter().any(|&p| p < MIN_PAYLOAD) {
         return Err(user(format!(
             "--payload: expected sizes of at least {MIN_PAYLOAD} bytes, got {:?}",
@@ -166,7 +166,6 @@ pub fn run(args: &IpcArgs, interrupt: crossbeam_channel::Receiver<()>) -> SwarmR
             args.fanout
         )));
     }
-    let interrupt = Interrupt::new(interrupt);
     let out = args.out.clone().unwrap_or_else(|| default_out("ipc"));
     make_out_dir(&out)?;
     let started = Instant::now();
@@ -187,7 +186,7 @@ pub fn run(args: &IpcArgs, interrupt: crossbeam_channel::Receiver<()>) -> SwarmR
     for &payload in &args.payload {
         for t in Transport::ALL {
             pb.set_message(format!("{} {}", t.name(), fmt_bytes(payload as f64)));
-            let row = match measure_pair(t, payload, args.secs, &interrupt, &mut report.run_ids) {
+            let row = match measure_pair(t, payload, args.secs, interrupt, &mut report.run_ids) {
                 Ok(r) => Row {
                     transport: t.name().to_string(),
                     payload,
@@ -227,7 +226,7 @@ pub fn run(args: &IpcArgs, interrupt: crossbeam_channel::Receiver<()>) -> SwarmR
             pb.inc(1);
             continue;
         }
-        let row = measure_fanout(k, args.secs, &interrupt, &mut report.run_ids);
+        let row = measure_fanout(k, args.secs, interrupt, &mut report.run_ids);
         interrupt.check()?;
         if let Some(e) = &row.error {
             tracing::warn!("fan-out to {k} failed: {e}");
@@ -239,14 +238,14 @@ pub fn run(args: &IpcArgs, interrupt: crossbeam_channel::Receiver<()>) -> SwarmR
 
     for mode in LossMode::ALL {
         pb.set_message(format!("loss: {}", mode.id()));
-        let row = measure_loss(mode, args.secs, &interrupt, &mut report.run_ids);
+        let row = measure_loss(mode, args.secs, interrupt, &mut report.run_ids);
         interrupt.check()?;
         report.loss.push(row);
         pb.inc(1);
     }
 
     pb.set_message("runtime path");
-    report.path = measure_path(args.secs, &interrupt, &mut report.run_ids);
+    report.path = measure_path(args.secs, interrupt, &mut report.run_ids);
     interrupt.check()?;
     pb.inc(1);
     pb.finish_and_clear();
@@ -286,6 +285,9 @@ fn ratios(rows: &mut [Row]) {
         }
     }
 }
+
+/// Alternating rounds of the path comparison.
+const PATH_ROUNDS: usize = 3;
 
 /// Time a child gets to set up before it counts as failed.
 const SETUP: Duration = Duration::from_secs(30);
@@ -455,7 +457,7 @@ fn measure_path(secs: f64, interrupt: &Interrupt, run_ids: &mut Vec<String>) -> 
         reply_bytes: PATH_REPLY,
         ..PathResult::default()
     };
-    let mut one = |runtime: bool| -> anyhow::Result<Summary> {
+    let mut one = |runtime: bool, secs: f64| -> anyhow::Result<Vec<u64>> {
         let run = BenchRun::claim()?;
         run_ids.push(run.id().to_string());
         let mut kids = Children::new();
@@ -482,14 +484,20 @@ fn measure_path(secs: f64, interrupt: &Interrupt, run_ids: &mut Vec<String>) -> 
         let limit = Duration::from_secs_f64(secs) + SETUP + PEER_TIMEOUT;
         let v = world.result(limit, interrupt)?;
         kids.finish(PEER_TIMEOUT)?;
-        Ok(serde_json::from_value(v["rtt_ns"].clone())?)
+        Ok(serde_json::from_value(v["samples_ns"].clone())?)
     };
+    // Raw and runtime alternate in PATH_ROUNDS rounds each and their samples are pooled, so
+    // bursts of background load on a shared machine hit both alike.
     let r = (|| -> anyhow::Result<()> {
-        let raw = one(false)?;
-        let rt = one(true)?;
-        res.raw_rtt_ns = raw;
-        res.runtime_rtt_ns = rt;
-        res.median_ratio = rt.median / raw.median;
+        let round = secs / PATH_ROUNDS as f64;
+        let (mut raw, mut rt) = (Vec::new(), Vec::new());
+        for _ in 0..PATH_ROUNDS {
+            raw.extend(one(false, round)?);
+            rt.extend(one(true, round)?);
+        }
+        res.raw_rtt_ns = summarize(&mut raw);
+        res.runtime_rtt_ns = summarize(&mut rt);
+        res.median_ratio = res.runtime_rtt_ns.median / res.raw_rtt_ns.median;
         Ok(())
     })();
     if let Err(e) = r {

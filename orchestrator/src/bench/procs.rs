@@ -16,6 +16,7 @@ use super::child::{ChildMsg, ChildSpec};
 pub struct Messages {
     name: String,
     rx: Receiver<ChildMsg>,
+    stdin: Option<std::process::ChildStdin>,
 }
 
 impl Messages {
@@ -29,6 +30,15 @@ impl Messages {
             recv(stop) -> _ => bail!("interrupted"),
             default(timeout) => bail!("{} reported nothing within {timeout:?}", self.name),
         }
+    }
+
+    /// Tells a child that waits on its stdin to go on.
+    pub fn go(&mut self) -> anyhow::Result<()> {
+        use std::io::Write;
+        let stdin = self.stdin.as_mut().context("child has no stdin")?;
+        stdin.write_all(b"go\n")?;
+        stdin.flush()?;
+        Ok(())
     }
 
     /// Waits for `Ready`; returns its address, if any.
@@ -107,7 +117,11 @@ impl Children {
         let json = serde_json::to_string(spec)?;
         let mut cmd = crate::processes::child_command(&exe);
         cmd.args(["bench", "child", "--spec", &json])
-            .stdin(Stdio::null())
+            .stdin(if report {
+                Stdio::piped()
+            } else {
+                Stdio::null()
+            })
             .stdout(if report {
                 Stdio::piped()
             } else {
@@ -136,6 +150,7 @@ impl Children {
             Some(Messages {
                 name: name.to_string(),
                 rx,
+                stdin: child.stdin.take(),
             })
         } else {
             None
@@ -246,27 +261,32 @@ pub fn open_fds(pid: u32) -> usize {
         .unwrap_or(0)
 }
 
-/// Live children of this process (pid, command line).
+/// Live children of this process (pid, command line), from
+/// `/proc/self/task/<tid>/children` (exact and fast: no scan of every process).
 pub fn my_children() -> Vec<(u32, String)> {
-    let me = std::process::id();
     let mut out = Vec::new();
-    let Ok(dir) = std::fs::read_dir("/proc") else {
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
         return out;
     };
-    for e in dir.flatten() {
-        let Ok(pid) = e.file_name().to_string_lossy().parse::<u32>() else {
+    for t in tasks.flatten() {
+        let Ok(list) = std::fs::read_to_string(t.path().join("children")) else {
             continue;
         };
-        let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
-            continue;
-        };
-        let Some((_, rest)) = stat.rsplit_once(')') else {
-            continue;
-        };
-        let f: Vec<&str> = rest.split_whitespace().collect();
-        if f.get(1).and_then(|p| p.parse::<u32>().ok()) == Some(me) && f[0] != "Z" {
-            let cmd = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
-            out.push((pid, String::from_utf8_lossy(&cmd).replace('\0', " ")));
+        for pid in list
+            .split_whitespace()
+            .filter_map(|p| p.parse::<u32>().ok())
+        {
+            let zombie = std::fs::read_to_string(format!("/proc/{pid}/stat"))
+                .ok()
+                .and_then(|s| {
+                    s.rsplit_once(')')
+                        .map(|(_, r)| r.split_whitespace().next() == Some("Z"))
+                })
+                .unwrap_or(true);
+            if !zombie {
+                let cmd = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+                out.push((pid, String::from_utf8_lossy(&cmd).replace('\0', " ")));
+            }
         }
     }
     out

@@ -4,8 +4,10 @@
 //!
 //! Tick numbers come from the world's own timing (`shell.timing` in its metrics): the ticks
 //! and their wall time, not the start-up or shutdown around them. Memory is read once per run
-//! from `/proc/<pid>/smaps_rollup` of every process, when the world reports its first tick
-//! (every process is up and has handled one tick; the run goes on meanwhile).
+//! from `/proc/<pid>/smaps_rollup` of every process after tick 17, when every process is up
+//! and each of the 16 observation samples has been written once. The runtime's world keeps
+//! ticking while it is read (a few ticks pay for it); the floor's world waits between two
+//! ticks (outside its timing).
 
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -18,7 +20,7 @@ use swarmrt_protocol::config::Config;
 use swarmrt_world::World;
 
 use super::child::{ChildMsg, ChildSpec};
-use super::floor::FloorResult;
+use super::floor::{FloorResult, SAMPLE_TICK};
 use super::plot::{Panel, Series, write_figure};
 use super::procs::{Children, Memory, memory, my_children, open_fds};
 use super::{
@@ -203,7 +205,7 @@ fn validate(args: &SwarmArgs) -> SwarmResult<()> {
 }
 
 /// `swarm bench swarm`.
-pub fn run(args: &SwarmArgs, interrupt: crossbeam_channel::Receiver<()>) -> SwarmResult<()> {
+pub fn run(args: &SwarmArgs, interrupt: &Interrupt) -> SwarmResult<()> {
     validate(args)?;
     // Resolve every scenario first: a bad config or an impossible layout is a user error
     // before anything starts.
@@ -215,7 +217,6 @@ pub fn run(args: &SwarmArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
     for &n in &args.in_process_agents {
         in_proc.push((n, scenario(&args.config, n, args.in_process_ticks)?));
     }
-    let interrupt = Interrupt::new(interrupt);
     let out = args.out.clone().unwrap_or_else(|| default_out("swarm"));
     make_out_dir(&out)?;
     let started = Instant::now();
@@ -230,7 +231,7 @@ pub fn run(args: &SwarmArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
     for (n, cfg) in &scenarios {
         pb.set_message(format!("runtime, {n} robots"));
         let dir = out.join("runs").join(format!("n{n}"));
-        let row = runtime_run(cfg, &dir, &interrupt, &mut report.run_ids);
+        let row = runtime_run(cfg, &dir, interrupt, &mut report.run_ids);
         interrupt.check()?;
         if let Some(e) = &row.error {
             tracing::warn!("runtime with {n} robots failed: {e}");
@@ -238,7 +239,7 @@ pub fn run(args: &SwarmArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
         report.runtime.push(row);
         pb.inc(1);
         pb.set_message(format!("floor, {n} robots"));
-        let row = floor_run(*n, args.ticks, &interrupt, &mut report.run_ids);
+        let row = floor_run(*n, args.ticks, interrupt, &mut report.run_ids);
         interrupt.check()?;
         if let Some(e) = &row.error {
             tracing::warn!("floor with {n} robots failed: {e}");
@@ -261,7 +262,7 @@ pub fn run(args: &SwarmArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
         .collect();
     for (n, cfg) in &in_proc {
         pb.set_message(format!("in-process, {n} robots"));
-        let row = in_process(cfg, &interrupt).unwrap_or_else(|e| InProcessRow {
+        let row = in_process(cfg, interrupt).unwrap_or_else(|e| InProcessRow {
             agents: *n,
             error: Some(format!("{e:#}")),
             ..InProcessRow::default()
@@ -315,18 +316,27 @@ fn runtime_run(
     let started = Instant::now();
     let r = (|| -> anyhow::Result<()> {
         let config_path = run_dir::prepare(dir, cfg)?;
-        let mut sampler: Option<std::thread::JoinHandle<(Memory, Option<usize>)>> = None;
+        // Read at the world's report of tick SAMPLE_TICK (every observation sample has been
+        // written once), in the supervisor's thread (it only delays reading the world's next
+        // reports); the world goes on ticking meanwhile.
+        let mut sample: Option<(Memory, Option<usize>)> = None;
         let outcome = processes::run(cfg, &config_path, dir, interrupt.receiver(), |tick| {
-            if sampler.is_none() && tick > 0 {
-                sampler = Some(std::thread::spawn(sample_children));
+            if sample.is_none() && (tick >= SAMPLE_TICK || tick == cfg.scenario.ticks) {
+                sample = Some(sample_children());
             }
         })?;
         run_ids.push(outcome.run_id.clone());
-        if let Some(s) = sampler
-            && let Ok((mem, fds)) = s.join()
-        {
-            row.memory = Some(mem);
-            row.world_fds = fds;
+        if let Some((mem, fds)) = sample {
+            // A run shorter than the reading itself leaves fewer processes to read.
+            if mem.processes == cfg.robots.count as usize + 1 {
+                row.memory = Some(mem);
+                row.world_fds = fds;
+            } else {
+                tracing::warn!(
+                    read = mem.processes,
+                    "the run ended while its memory was read; no memory figures"
+                );
+            }
         }
         row.startup_ms = outcome.startup_ms.map(|v| v as f64);
         if let Some(f) = &outcome.world_failure {
@@ -376,7 +386,7 @@ fn floor_run(n: u32, ticks: u64, interrupt: &Interrupt, run_ids: &mut Vec<String
         let run = BenchRun::claim()?;
         run_ids.push(run.id().to_string());
         let mut kids = Children::new();
-        let world = kids
+        let mut world = kids
             .spawn(
                 "floor world",
                 &ChildSpec::FloorWorld {
@@ -403,6 +413,7 @@ fn floor_run(n: u32, ticks: u64, interrupt: &Interrupt, run_ids: &mut Vec<String
         let mut msg = world.next(startup, interrupt)?;
         if msg == ChildMsg::Progress {
             row.memory = Some(memory(&kids.pids()));
+            world.go()?;
             msg = world.next(PEER_TIMEOUT + Duration::from_secs(ticks), interrupt)?;
         }
         let ChildMsg::Result { value } = msg else {

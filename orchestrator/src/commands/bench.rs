@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 
 use crate::bench;
-use crate::error::SwarmResult;
+use crate::error::{SwarmError, SwarmResult};
 
 /// `swarm bench <what>`.
 #[derive(Subcommand, Debug, Clone)]
@@ -77,12 +77,20 @@ pub struct ChildArgs {
     pub spec: String,
 }
 
-/// Runs a benchmark; `interrupt` fires on Ctrl-C.
+/// Runs a benchmark; `interrupt` fires on Ctrl-C, which stops it with exit code 130 after
+/// every child is reaped and every iceoryx2 resource removed (no results are written).
 pub fn bench(cmd: &BenchCmd, interrupt: crossbeam_channel::Receiver<()>) -> SwarmResult<()> {
-    match cmd {
-        BenchCmd::Ipc(args) => bench::ipc::run(args, interrupt),
-        BenchCmd::Swarm(args) => bench::swarm::run(args, interrupt),
+    let interrupt = bench::Interrupt::new(interrupt);
+    let r = match cmd {
+        BenchCmd::Ipc(args) => bench::ipc::run(args, &interrupt),
+        BenchCmd::Swarm(args) => bench::swarm::run(args, &interrupt),
         BenchCmd::Child(args) => bench::child::main(args),
+    };
+    match r {
+        Err(SwarmError::Internal(_)) if interrupt.fired() => Err(SwarmError::Interrupted(
+            "interrupted before the results were written".into(),
+        )),
+        r => r,
     }
 }
 
