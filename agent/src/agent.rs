@@ -6,6 +6,8 @@ use swarmrt_protocol::{Command, Observation, RadioMsg, RobotState};
 
 use crate::behaviours::Behaviour;
 use crate::behaviours::goto::Goto;
+use crate::consensus::Consensus;
+use crate::consensus::raft::Persistent;
 
 /// A radio message as the behaviour sees it: who sent it, when, and what it says.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,11 +40,23 @@ pub struct Agent {
     beacons: BTreeMap<u32, BeaconInfo>,
     malformed: u64,
     inbox: Vec<Decoded>,
+    consensus: Option<Consensus>,
 }
 
 impl Agent {
     /// The agent of robot `id` for this scenario.
     pub fn new(cfg: &Config, id: u32) -> Agent {
+        Self::with_consensus(cfg, id, Consensus::new(cfg, id))
+    }
+
+    /// Robot `id` restarting after a crash: a fresh behaviour, and a consensus layer that
+    /// kept its persistent Raft state (term, vote, commit, log) and re-applies the committed
+    /// decisions. `incarnation` counts the restarts.
+    pub fn restore(cfg: &Config, id: u32, state: Persistent, incarnation: u32) -> Agent {
+        Self::with_consensus(cfg, id, Consensus::restore(cfg, id, state, incarnation))
+    }
+
+    fn with_consensus(cfg: &Config, id: u32, consensus: Option<Consensus>) -> Agent {
         let behaviour: Box<dyn Behaviour + Send> = match &cfg.behaviour {
             BehaviourConfig::Goto(g) => Box::new(Goto::new(cfg, g, id)),
         };
@@ -52,7 +66,13 @@ impl Agent {
             beacons: BTreeMap::new(),
             malformed: 0,
             inbox: Vec::new(),
+            consensus,
         }
+    }
+
+    /// The consensus layer, when the scenario has `[consensus]`.
+    pub fn consensus(&self) -> Option<&Consensus> {
+        self.consensus.as_ref()
     }
 
     /// The robot id.
@@ -76,7 +96,6 @@ impl Agent {
         for f in obs.inbox() {
             match RadioMsg::decode(f.bytes()) {
                 Some(msg) => {
-                    #[allow(irrefutable_let_patterns)] // later behaviours add message kinds
                     if let RadioMsg::Beacon { x, y, theta } = msg {
                         let newer = self
                             .beacons
@@ -107,9 +126,21 @@ impl Agent {
             // Knocked down or dead: nothing to decide.
             return Command::act(self.id, obs.tick);
         }
+        // Consensus first: robots act only on committed decisions, and a decision applied
+        // this tick already shapes this tick's command.
+        let decisions = match &mut self.consensus {
+            Some(c) => c.step(obs, &self.inbox),
+            None => Vec::new(),
+        };
+        for d in &decisions {
+            self.behaviour.apply(d);
+        }
         let mut cmd = self.behaviour.step(obs, &self.inbox);
         cmd.robot = self.id;
         cmd.tick = obs.tick;
+        if let Some(c) = &mut self.consensus {
+            c.finish(&mut cmd);
+        }
         cmd
     }
 }

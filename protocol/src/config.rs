@@ -49,6 +49,9 @@ pub struct Config {
     /// Which behaviour every robot runs.
     #[serde(default)]
     pub behaviour: BehaviourConfig,
+    /// Consensus among the robots (none when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub consensus: Option<crate::consensus::ConsensusConfig>,
 }
 
 /// `[scenario]`.
@@ -656,6 +659,9 @@ impl Config {
                 range_f("behaviour.slot_spacing", g.slot_spacing, 0.0, 1e6)?;
             }
         }
+        if let Some(c) = &self.consensus {
+            c.validate(self)?;
+        }
 
         Ok(())
     }
@@ -748,7 +754,7 @@ fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
-fn check(ok: bool, key: &str, expected: &str) -> Result<(), (String, String)> {
+pub(crate) fn check(ok: bool, key: &str, expected: &str) -> Result<(), (String, String)> {
     if ok {
         Ok(())
     } else {
@@ -760,7 +766,7 @@ fn finite(key: &str, v: f64) -> Result<(), (String, String)> {
     check(v.is_finite(), key, &format!("a finite number, got {v}"))
 }
 
-fn range_f(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), (String, String)> {
+pub(crate) fn range_f(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), (String, String)> {
     check(
         v.is_finite() && v >= lo && v <= hi,
         key,
@@ -768,7 +774,7 @@ fn range_f(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), (String, String)> 
     )
 }
 
-fn range_u64(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), (String, String)> {
+pub(crate) fn range_u64(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), (String, String)> {
     check(
         v >= lo && v <= hi,
         key,

@@ -15,6 +15,8 @@ pub enum RadioMsg {
         /// Sender's estimated heading in radians.
         theta: f64,
     },
+    /// Election, replicated log and leader choice (`crate::consensus`).
+    Consensus(crate::consensus::ConsensusMsg),
 }
 
 impl RadioMsg {
@@ -27,6 +29,7 @@ impl RadioMsg {
     pub fn kind(&self) -> &'static str {
         match self {
             RadioMsg::Beacon { .. } => "beacon",
+            RadioMsg::Consensus(m) => m.kind(),
         }
     }
 }
