@@ -5,7 +5,9 @@
 pub mod cleanup;
 pub mod cli;
 pub mod commands;
+pub mod consensus_check;
 pub mod error;
+pub mod fuzz;
 pub mod in_process;
 pub mod plot;
 pub mod processes;
