@@ -2,7 +2,7 @@
 
 use std::collections::BTreeMap;
 use swarmrt_protocol::config::{BehaviourConfig, Config};
-use swarmrt_protocol::{Command, Observation, RadioMsg, RobotState};
+use swarmrt_protocol::{BROADCAST, Command, Observation, RadioMsg, RobotState};
 
 use crate::behaviours::Behaviour;
 use crate::behaviours::goto::Goto;
@@ -94,6 +94,11 @@ impl Agent {
     pub fn step(&mut self, obs: &Observation) -> Command {
         self.inbox.clear();
         for f in obs.inbox() {
+            if f.dst != BROADCAST && f.dst != self.id {
+                // Not for us (the world routes unicast only to its addressee, but answers
+                // such as a granted vote must never be taken for one's own).
+                continue;
+            }
             match RadioMsg::decode(f.bytes()) {
                 Some(msg) => {
                     if let RadioMsg::Beacon { x, y, theta } = msg {

@@ -818,7 +818,7 @@ impl Raft {
             self.unsent += (out.len() - budget) as u64;
             out.truncate(budget);
         }
-        if self.role != Role::Leader || out.len() >= budget {
+        if self.role != Role::Leader || out.len() >= budget || self.p.n <= 1 {
             return out;
         }
         let last = self.log.last_index();
