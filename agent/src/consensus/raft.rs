@@ -813,7 +813,7 @@ impl Raft {
     /// The messages to send this tick, at most `budget` frames: answers first, then the
     /// leader's AppendEntries broadcasts. What does not fit is dropped (as a lost frame).
     pub fn ready(&mut self, budget: usize) -> Vec<(u32, ConsensusMsg)> {
-        let mut out = std::mem::take(&mut self.msgs);
+        let mut out = coalesce(std::mem::take(&mut self.msgs));
         if out.len() > budget {
             self.unsent += (out.len() - budget) as u64;
             out.truncate(budget);
@@ -889,6 +889,52 @@ impl Raft {
     }
 }
 
+/// Drops superseded campaign requests, and merges the answers to several AppendEntries of one
+/// leader and term within a tick into one:
+/// the highest success index (each success vouches for a prefix of the same leader's log, and
+/// a leader never contradicts its own entries within its term), or, without a success, the last
+/// refusal. Frames are scarce; one answer says all the others would.
+fn coalesce(msgs: Vec<(u32, ConsensusMsg)>) -> Vec<(u32, ConsensusMsg)> {
+    let mut out: Vec<(u32, ConsensusMsg)> = Vec::with_capacity(msgs.len());
+    for (to, m) in msgs {
+        if let ConsensusMsg::AppendResp {
+            term,
+            success,
+            index,
+        } = m
+        {
+            let earlier = out.iter_mut().find(|(t, o)| {
+                *t == to && matches!(o, ConsensusMsg::AppendResp { term: ot, .. } if *ot == term)
+            });
+            if let Some((
+                _,
+                ConsensusMsg::AppendResp {
+                    success: s0,
+                    index: i0,
+                    ..
+                },
+            )) = earlier
+            {
+                match (*s0, success) {
+                    (true, true) => *i0 = (*i0).max(index),
+                    (true, false) => {}
+                    (false, _) => (*s0, *i0) = (success, index),
+                }
+                continue;
+            }
+        }
+        if matches!(m, ConsensusMsg::PreVote { .. } | ConsensusMsg::Vote { .. }) {
+            // Only the latest campaign request matters (a repeat and a new campaign can
+            // fall in the same tick).
+            out.retain(|(_, o)| {
+                !matches!(o, ConsensusMsg::PreVote { .. } | ConsensusMsg::Vote { .. })
+            });
+        }
+        out.push((to, m));
+    }
+    out
+}
+
 /// Whether `m` fits one radio frame inside [`swarmrt_protocol::RadioMsg::Consensus`] (whose
 /// variant tag takes one byte).
 pub fn fits_frame(m: &ConsensusMsg) -> bool {
@@ -905,5 +951,50 @@ fn msg_term(m: &ConsensusMsg) -> u64 {
         | ConsensusMsg::Append { term, .. }
         | ConsensusMsg::AppendResp { term, .. } => *term,
         ConsensusMsg::QuadClaim { .. } | ConsensusMsg::QuadLeader { .. } => 0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn resp(term: u64, success: bool, index: u64) -> ConsensusMsg {
+        ConsensusMsg::AppendResp {
+            term,
+            success,
+            index,
+        }
+    }
+
+    #[test]
+    fn answers_to_one_leader_merge_and_stale_requests_go() {
+        let req = |term| ConsensusMsg::PreVote {
+            term,
+            last_index: 0,
+            last_term: 0,
+        };
+        let merged = coalesce(vec![
+            (1, resp(3, true, 4)),
+            (BROADCAST, req(4)),
+            (1, resp(3, false, 2)),
+            (1, resp(3, true, 7)),
+            (2, resp(3, true, 1)),
+            (1, resp(4, false, 0)),
+            (BROADCAST, req(5)),
+        ]);
+        assert_eq!(
+            merged,
+            vec![
+                (1, resp(3, true, 7)),
+                (2, resp(3, true, 1)),
+                (1, resp(4, false, 0)),
+                (BROADCAST, req(5)),
+            ]
+        );
+        // A refusal followed by a success becomes the success.
+        assert_eq!(
+            coalesce(vec![(1, resp(3, false, 2)), (1, resp(3, true, 5))]),
+            vec![(1, resp(3, true, 5))]
+        );
     }
 }

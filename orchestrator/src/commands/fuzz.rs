@@ -134,10 +134,13 @@ fn fuzz_consensus(a: &ConsensusArgs) -> SwarmResult<()> {
     let mut failed: Vec<u64> = Vec::new();
     let mut ticks = 0u64;
     let mut recovered: Vec<u64> = Vec::new();
+    let (mut left_for_notes, mut unsent) = (0u64, 0u64);
     for seed in a.start_seed..end {
         let case = consensus::draw(seed);
         let out = consensus::run(&case, a.dump.is_some());
         ticks += out.ticks;
+        left_for_notes += out.budget.0;
+        unsent += out.budget.1;
         if let Some(r) = out.recovered_after {
             recovered.push(r);
         }
@@ -188,6 +191,9 @@ fn fuzz_consensus(a: &ConsensusArgs) -> SwarmResult<()> {
         a.seeds as f64 / secs.max(1e-9),
         ticks as f64 / secs.max(1e-9),
         election::median(&mut rec).map_or("-".to_string(), |m| m.to_string())
+    );
+    println!(
+        "messages left unprocessed for lack of note room: {left_for_notes}; dropped for lack of free frames: {unsent}"
     );
     if failed.is_empty() {
         Ok(())

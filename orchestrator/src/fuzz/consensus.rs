@@ -217,6 +217,8 @@ pub struct Outcome {
     pub recovered_after: Option<u64>,
     /// The recorded `events.jsonl` text, when asked for.
     pub events: Option<String>,
+    /// Messages left unprocessed for lack of note room, and dropped for lack of frames.
+    pub budget: (u64, u64),
 }
 
 /// Runs a case; `record` keeps its note stream as `events.jsonl` text.
@@ -322,6 +324,7 @@ pub fn run(case: &Case, record: bool) -> Outcome {
         ticks: sim.tick(),
         recovered_after,
         events: record.then(|| sim.recorded()),
+        budget: sim.budget_counters(),
     }
 }
 
@@ -330,4 +333,52 @@ pub fn applied_decision(raft: &Raft, id: u16) -> bool {
     (1..=raft.applied()).any(|i| {
         matches!(raft.log().get(i).map(|e| e.item), Some(Item::Decision { id: k, .. }) if k == id)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_seed_replays_to_the_same_notes() {
+        let case = draw(11);
+        let (a, b) = (run(&case, true), run(&draw(11), true));
+        assert!(a.failures.is_empty(), "{:?}", a.failures);
+        assert_eq!(a.ticks, b.ticks);
+        assert_eq!(a.events, b.events);
+        assert_ne!(draw(12).to_string(), case.to_string());
+    }
+
+    #[test]
+    fn liveness_fails_when_the_bound_is_too_short() {
+        let mut case = draw(3);
+        case.faults.clear();
+        case.bound = 1;
+        let out = run(&case, false);
+        assert_eq!(out.failures.len(), 1, "{:?}", out.failures);
+        assert!(
+            out.failures[0].starts_with("liveness"),
+            "{:?}",
+            out.failures
+        );
+    }
+
+    #[test]
+    fn crashing_the_leader_and_partitions_still_hold() {
+        // Every seed below draws at least one leader crash; all must hold.
+        let mut crashed = 0;
+        for seed in 0..40 {
+            let case = draw(seed);
+            if case
+                .faults
+                .iter()
+                .any(|f| matches!(f, Fault::Crash { leader: true, .. }))
+            {
+                crashed += 1;
+                let out = run(&case, false);
+                assert!(out.failures.is_empty(), "seed {seed}: {:?}", out.failures);
+            }
+        }
+        assert!(crashed >= 5, "enough leader crashes drawn: {crashed}");
+    }
 }

@@ -72,6 +72,9 @@ pub struct Sim {
     checker: Checker,
     tick: u64,
     record: Option<Vec<String>>,
+    /// (messages left for lack of note room, messages beyond the frame budget) of crashed
+    /// incarnations.
+    lost_counts: (u64, u64),
 }
 
 impl Sim {
@@ -94,6 +97,7 @@ impl Sim {
             checker: Checker::new(),
             tick: 0,
             record: None,
+            lost_counts: (0, 0),
             cfg: cfg.clone(),
         }
     }
@@ -155,6 +159,9 @@ impl Sim {
         let Some(a) = self.agents[r as usize].take() else {
             return;
         };
+        let (l, u) = counts(&a);
+        self.lost_counts.0 += l;
+        self.lost_counts.1 += u;
         self.saved[r as usize] = a.consensus().and_then(|c| c.persistent());
         self.checker.died(self.tick, r);
         if let Some(rec) = &mut self.record {
@@ -227,8 +234,24 @@ impl Sim {
         self.medium.deliver(self.tick, &can_talk, &mut self.inboxes);
     }
 
+    /// Messages the Raft cores left unprocessed because their notes would not have fit the
+    /// tick's report, and messages they dropped because the tick's frames were used up.
+    pub fn budget_counters(&self) -> (u64, u64) {
+        self.agents
+            .iter()
+            .flatten()
+            .map(counts)
+            .fold(self.lost_counts, |acc, c| (acc.0 + c.0, acc.1 + c.1))
+    }
+
     /// Radio counters so far.
     pub fn radio(&self) -> swarmrt_world::radio::RadioStats {
         self.medium.stats()
     }
+}
+
+fn counts(a: &Agent) -> (u64, u64) {
+    a.consensus()
+        .and_then(|c| c.raft())
+        .map_or((0, 0), |r| (r.left_for_notes(), r.unsent()))
 }
