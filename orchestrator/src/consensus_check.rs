@@ -468,7 +468,7 @@ impl Checker {
                 );
             }
             ConsensusNote::Sent(c) => v.sent = c,
-            ConsensusNote::Quadrant { leader, score } => v.quadrant = Some((leader, score)),
+            ConsensusNote::Quadrant { leader, score, .. } => v.quadrant = Some((leader, score)),
         }
     }
 

@@ -315,9 +315,25 @@ pub enum ConsensusNote {
     Quadrant {
         /// The believed leader (itself when it declared itself leader).
         leader: u32,
+        /// True when that is this robot: it declared itself leader of its group.
+        leads: bool,
         /// This robot's own score (most group members seen in one quadrant).
         score: u8,
     },
+}
+
+impl ConsensusNote {
+    /// True when the robot says it is the leader now: it became Raft leader of its term, or
+    /// declared itself quadrant leader (the target of a `"leader"` fault).
+    pub fn claims_leadership(&self) -> bool {
+        matches!(
+            self,
+            ConsensusNote::State {
+                role: Role::Leader,
+                ..
+            } | ConsensusNote::Quadrant { leads: true, .. }
+        )
+    }
 }
 
 /// Which consensus algorithm the robots run.
@@ -732,6 +748,30 @@ speed = 0.2
         let fast = BASE.replace("speed = 0.2", "speed = 5.0");
         let e = Config::from_toml_str("t.toml", &fast, &[]).unwrap_err();
         assert_eq!(e.key, "consensus.propose[1].speed", "{e}");
+    }
+
+    #[test]
+    fn leaders_claim_leadership_others_do_not() {
+        let leader = ConsensusNote::State {
+            term: 2,
+            role: Role::Leader,
+            vote: Some(1),
+        };
+        let candidate = ConsensusNote::State {
+            term: 2,
+            role: Role::Candidate,
+            vote: Some(1),
+        };
+        assert!(leader.claims_leadership());
+        assert!(!candidate.claims_leadership());
+        let q = |leads| ConsensusNote::Quadrant {
+            leader: 3,
+            leads,
+            score: 4,
+        };
+        assert!(q(true).claims_leadership());
+        assert!(!q(false).claims_leadership());
+        assert!(!ConsensusNote::Commit { index: 1 }.claims_leadership());
     }
 
     #[test]

@@ -162,6 +162,7 @@ impl Quadrant {
         {
             let note = ConsensusNote::Quadrant {
                 leader: l,
+                leads: l == self.id,
                 score: self.score,
             };
             if notes.room() >= Notes::cost(&note) {
