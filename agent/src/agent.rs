@@ -5,6 +5,7 @@ use swarmrt_protocol::config::{BehaviourConfig, Config};
 use swarmrt_protocol::{Command, Observation, RadioMsg, RobotState};
 
 use crate::behaviours::Behaviour;
+use crate::behaviours::formation::Formation;
 use crate::behaviours::goto::Goto;
 
 /// A radio message as the behaviour sees it: who sent it, when, and what it says.
@@ -45,6 +46,7 @@ impl Agent {
     pub fn new(cfg: &Config, id: u32) -> Agent {
         let behaviour: Box<dyn Behaviour + Send> = match &cfg.behaviour {
             BehaviourConfig::Goto(g) => Box::new(Goto::new(cfg, g, id)),
+            BehaviourConfig::Formation(f) => Box::new(Formation::new(cfg, f, id)),
         };
         Agent {
             id,
@@ -76,7 +78,6 @@ impl Agent {
         for f in obs.inbox() {
             match RadioMsg::decode(f.bytes()) {
                 Some(msg) => {
-                    #[allow(irrefutable_let_patterns)] // later behaviours add message kinds
                     if let RadioMsg::Beacon { x, y, theta } = msg {
                         let newer = self
                             .beacons

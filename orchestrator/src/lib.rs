@@ -2,11 +2,13 @@
 //! writes run directories. Also runs the same cores in-process.
 #![warn(missing_docs)]
 
+pub mod bench;
 pub mod cleanup;
 pub mod cli;
 pub mod commands;
 pub mod error;
 pub mod in_process;
+pub mod metrics;
 pub mod plot;
 pub mod processes;
 pub mod run_dir;

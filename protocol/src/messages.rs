@@ -4,10 +4,11 @@
 //! instead of misread. Bounded collections are fixed arrays with a length field: shared memory
 //! holds no pointers.
 
+use crate::MAX_REPORT;
 use iceoryx2::prelude::*;
 
 /// Bumped whenever the layout or meaning of a message changes.
-pub const PROTOCOL_VERSION: u32 = 1;
+pub const PROTOCOL_VERSION: u32 = 2;
 /// Largest radio payload in bytes; larger frames are refused by [`Command::push_frame`].
 pub const MAX_PAYLOAD: usize = 128;
 /// Frames one robot may put into one [`Command`]; the radio capacity `K` is at most this.
@@ -250,6 +251,11 @@ pub struct Command {
     pub outbox_len: u16,
     /// Frames to send this tick; `src` and `sent_tick` are overwritten by the world.
     pub outbox: [Frame; MAX_OUTBOX],
+    /// Number of valid bytes in `report`.
+    pub report_len: u16,
+    /// The robot's own notes for the run record: a postcard-encoded `Vec<`[`crate::Note`]`>`
+    /// (empty when `report_len` is 0). The world checks and logs them; it never acts on them.
+    pub report: [u8; MAX_REPORT],
 }
 
 /// Why a frame could not be queued.
@@ -275,6 +281,8 @@ impl Command {
             lidar_on: 0,
             outbox_len: 0,
             outbox: [Frame::EMPTY; MAX_OUTBOX],
+            report_len: 0,
+            report: [0; MAX_REPORT],
         }
     }
 
@@ -312,10 +320,50 @@ impl Command {
     }
 }
 
+impl Command {
+    /// Encodes `notes` into the report (replacing any earlier report).
+    pub fn set_notes(&mut self, notes: &[crate::Note]) -> Result<(), PushError> {
+        if notes.is_empty() {
+            self.report_len = 0;
+            return Ok(());
+        }
+        let used = postcard::to_slice(notes, &mut self.report)
+            .map_err(|_| PushError::TooLarge)?
+            .len();
+        self.report_len = used as u16;
+        Ok(())
+    }
+
+    /// Decodes the report: `Ok(empty)` when there is none, `Err` when it is malformed.
+    pub fn notes(&self) -> Result<Vec<crate::Note>, &'static str> {
+        let len = self.report_len as usize;
+        if len == 0 {
+            return Ok(Vec::new());
+        }
+        if len > MAX_REPORT {
+            return Err("report length out of range");
+        }
+        postcard::from_bytes(&self.report[..len]).map_err(|_| "malformed report")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::RadioMsg;
+
+    #[test]
+    fn notes_round_trip_and_garbage_is_refused() {
+        let mut cmd = Command::act(1, 0);
+        assert_eq!(cmd.notes(), Ok(vec![]));
+        let notes = vec![crate::Note::EpsilonFlip, crate::Note::Role { role: 2 }];
+        cmd.set_notes(&notes).unwrap();
+        assert_eq!(cmd.notes(), Ok(notes));
+        cmd.report[0] = 200;
+        assert!(cmd.notes().is_err());
+        cmd.report_len = MAX_REPORT as u16 + 1;
+        assert_eq!(cmd.notes(), Err("report length out of range"));
+    }
 
     #[test]
     fn outbox_refuses_the_ninth_frame() {

@@ -127,6 +127,12 @@ pub fn run(
             metrics["ticks"] = json!(recorded_ticks(&dir));
         }
     }
+    // Robots whose process is gone, by the schedule or by a crash.
+    metrics["robots_lost"] = metrics.get("dead").cloned().unwrap_or(json!(0));
+    match crate::metrics::from_records(&cfg, &dir) {
+        Ok(m) => merge(&mut metrics, m),
+        Err(e) => tracing::warn!("could not compute metrics from the records: {e:#}"),
+    }
     run_dir::write_metrics(&dir, &metrics)?;
     if let Err(e) = run_dir::write_plots(&dir, &cfg) {
         tracing::warn!("could not draw the trajectory plot: {e:#}");

@@ -442,6 +442,7 @@ fn check_metrics(requested: &[String], cfg: &Config, existing: Option<&Table>) -
         return Ok(());
     }
     let mut known: BTreeSet<String> = RUN_METRICS.iter().map(|s| s.to_string()).collect();
+    known.extend(crate::metrics::names(cfg).iter().map(|s| s.to_string()));
     if let Ok(world) = World::new(cfg)
         && let Ok(v) = serde_json::to_value(world.metrics())
     {
