@@ -5,6 +5,7 @@ use swarmrt_protocol::config::{BehaviourConfig, Config};
 use swarmrt_protocol::{BROADCAST, Command, Observation, RadioMsg, RobotState};
 
 use crate::behaviours::Behaviour;
+use crate::behaviours::formation::Formation;
 use crate::behaviours::goto::Goto;
 use crate::consensus::Consensus;
 use crate::consensus::raft::Persistent;
@@ -59,6 +60,7 @@ impl Agent {
     fn with_consensus(cfg: &Config, id: u32, consensus: Option<Consensus>) -> Agent {
         let behaviour: Box<dyn Behaviour + Send> = match &cfg.behaviour {
             BehaviourConfig::Goto(g) => Box::new(Goto::new(cfg, g, id)),
+            BehaviourConfig::Formation(f) => Box::new(Formation::new(cfg, f, id)),
         };
         Agent {
             id,

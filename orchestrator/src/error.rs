@@ -11,6 +11,9 @@ pub enum SwarmError {
     /// Something broke that is not the user's fault.
     #[error(transparent)]
     Internal(#[from] anyhow::Error),
+    /// Ctrl-C stopped work that can be resumed (a sweep); the message says how.
+    #[error("{0}")]
+    Interrupted(String),
 }
 
 impl SwarmError {
@@ -19,6 +22,8 @@ impl SwarmError {
         match self {
             SwarmError::User(_) => 2,
             SwarmError::Internal(_) => 1,
+            // 128 + SIGINT, as shells report a process stopped by Ctrl-C.
+            SwarmError::Interrupted(_) => 130,
         }
     }
 }

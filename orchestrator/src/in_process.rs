@@ -31,6 +31,8 @@ pub fn run(
             interrupted = true;
             break;
         }
+        // A scheduled kill only marks the robot dead here: there is no process to signal.
+        world.take_kills();
         world.observe(&mut obs);
         let commands: Vec<_> = agents
             .iter_mut()

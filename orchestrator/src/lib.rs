@@ -2,6 +2,7 @@
 //! writes run directories. Also runs the same cores in-process.
 #![warn(missing_docs)]
 
+pub mod bench;
 pub mod cleanup;
 pub mod cli;
 pub mod commands;
@@ -9,6 +10,8 @@ pub mod consensus_check;
 pub mod error;
 pub mod fuzz;
 pub mod in_process;
+pub mod metrics;
 pub mod plot;
 pub mod processes;
 pub mod run_dir;
+pub mod sweep;

@@ -8,6 +8,10 @@ use swarmrt_orchestrator::error::SwarmError;
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     swarmrt_protocol::logging::init();
+    if let Cmd::Bench(commands::bench::BenchCmd::Child(args)) = &cli.command {
+        // Benchmark children keep the default SIGTERM/SIGINT actions (no Ctrl-C handler).
+        return commands::bench::child(args);
+    }
     let (tx, rx) = crossbeam_channel::unbounded::<()>();
     if let Err(e) = ctrlc::set_handler(move || {
         let _ = tx.send(());
@@ -19,7 +23,7 @@ fn main() -> std::process::ExitCode {
         Cmd::Check(args) => commands::check::check(args),
         Cmd::Clean => commands::clean::clean(),
         Cmd::Sweep(args) => commands::sweep::sweep(args, rx),
-        Cmd::Bench(cmd) => commands::bench::bench(cmd),
+        Cmd::Bench(cmd) => commands::bench::bench(cmd, rx),
         Cmd::Fuzz(cmd) => commands::fuzz::fuzz(cmd),
     };
     match result {
@@ -28,6 +32,7 @@ fn main() -> std::process::ExitCode {
             match &e {
                 SwarmError::User(msg) => eprintln!("error: {msg}"),
                 SwarmError::Internal(err) => eprintln!("error: {err:#}"),
+                SwarmError::Interrupted(msg) => eprintln!("{msg}"),
             }
             std::process::ExitCode::from(e.exit_code())
         }

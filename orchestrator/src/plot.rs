@@ -64,7 +64,7 @@ const CROSS: RGBColor = RGBColor(214, 39, 40);
 const LEGEND_INK: RGBColor = RGBColor(60, 60, 60);
 
 /// Registers the embedded font once; later calls return the first outcome.
-fn ensure_font() -> anyhow::Result<()> {
+pub(crate) fn ensure_font() -> anyhow::Result<()> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         plotters::style::register_font("sans-serif", FontStyle::Normal, FONT_BYTES).is_ok()

@@ -6,7 +6,7 @@
 //! (reports), the reaper (`waitpid` on every child, so iceoryx2 never sees zombies) and the
 //! Ctrl-C handler. No polling.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::{BufRead, BufReader, Write};
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
@@ -82,7 +82,10 @@ pub fn sibling_binary(name: &str) -> anyhow::Result<PathBuf> {
     )
 }
 
-fn child_command(bin: &Path) -> Command {
+/// A command for a child of this orchestrator: its own process group, SIGTERM if the
+/// spawning thread dies. The spawning thread must outlive the child (`PR_SET_PDEATHSIG` follows
+/// the thread, not the process).
+pub fn child_command(bin: &Path) -> Command {
     let mut cmd = Command::new(bin);
     // Own process group: a terminal's Ctrl-C reaches only the orchestrator, which then stops
     // the run in order. If the orchestrator dies, the child gets SIGTERM and exits cleanly.
@@ -305,10 +308,20 @@ fn supervise(
     let mut world_eof = false;
     let mut world_exit: Option<String> = None;
     let mut interrupts = 0;
+    let mut scheduled_kills: BTreeSet<i32> = BTreeSet::new();
     while !done {
         match rx.recv()? {
             Msg::Report(Report::Ready { startup_ms }) => outcome.startup_ms = Some(startup_ms),
             Msg::Report(Report::Tick { tick }) => progress(tick),
+            Msg::Report(Report::Kill { robot }) => {
+                // A scheduled kill: the world counts the robot dead already; the real signal
+                // exercises the crash path.
+                if let Some((&pid, _)) = robots.iter().find(|(_, id)| **id == robot) {
+                    scheduled_kills.insert(pid);
+                    // SAFETY: kill(2) with a pid we spawned and have not reaped yet.
+                    unsafe { libc::kill(pid, libc::SIGKILL) };
+                }
+            }
             Msg::Report(Report::Done {
                 interrupted,
                 metrics,
@@ -326,7 +339,7 @@ fn supervise(
                 } else if let Some(id) = robots.remove(&pid) {
                     // Code 0 is a robot that saw the world's shutdown sample before we saw
                     // the world's Done report: a clean end, not a death.
-                    if how != CLEAN_EXIT {
+                    if how != CLEAN_EXIT && !scheduled_kills.contains(&pid) {
                         tracing::warn!(robot = id, "robot process {how}");
                         outcome.unscheduled_deaths.insert(id, how.clone());
                     }

@@ -12,6 +12,16 @@ use crate::plot::{RobotTrack, write_trajectory_plots};
 
 /// `runs/<scenario>-s<seed>-<time>/`, with a numeric suffix if that exists already.
 pub fn default_dir(cfg: &Config) -> PathBuf {
+    unused_dir(&format!(
+        "runs/{}-s{}-{}",
+        cfg.scenario.name,
+        cfg.scenario.seed,
+        timestamp()
+    ))
+}
+
+/// The current UTC time as `YYYYMMDD-hhmmss`, for directory names.
+pub fn timestamp() -> String {
     let secs = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_secs())
@@ -19,11 +29,12 @@ pub fn default_dir(cfg: &Config) -> PathBuf {
     let (h, m, s) = ((secs / 3600) % 24, (secs / 60) % 60, secs % 60);
     let days = secs / 86_400;
     let (y, mo, d) = civil_from_days(days as i64);
-    let base = format!(
-        "runs/{}-s{}-{y:04}{mo:02}{d:02}-{h:02}{m:02}{s:02}",
-        cfg.scenario.name, cfg.scenario.seed
-    );
-    let mut dir = PathBuf::from(&base);
+    format!("{y:04}{mo:02}{d:02}-{h:02}{m:02}{s:02}")
+}
+
+/// `base`, or `base-1`, `base-2`, ... if that exists already.
+pub fn unused_dir(base: &str) -> PathBuf {
+    let mut dir = PathBuf::from(base);
     let mut k = 1;
     while dir.exists() {
         dir = PathBuf::from(format!("{base}-{k}"));
@@ -33,7 +44,7 @@ pub fn default_dir(cfg: &Config) -> PathBuf {
 }
 
 /// Days since 1970-01-01 to (year, month, day), proleptic Gregorian (H. Hinnant's algorithm).
-fn civil_from_days(z: i64) -> (i64, u32, u32) {
+pub fn civil_from_days(z: i64) -> (i64, u32, u32) {
     let z = z + 719_468;
     let era = z.div_euclid(146_097);
     let doe = z.rem_euclid(146_097);

@@ -49,6 +49,9 @@ pub struct Config {
     /// Which behaviour every robot runs.
     #[serde(default)]
     pub behaviour: BehaviourConfig,
+    /// Scheduled faults.
+    #[serde(default)]
+    pub faults: crate::faults::FaultsConfig,
     /// Consensus among the robots (none when absent).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub consensus: Option<crate::consensus::ConsensusConfig>,
@@ -369,6 +372,90 @@ impl Default for RadioConfig {
 pub enum BehaviourConfig {
     /// Go to the goal with reactive lidar avoidance and periodic pose beacons.
     Goto(GotoConfig),
+    /// Virtual-leader formation with three observer lidars and epsilon-greedy (seed 000).
+    Formation(FormationConfig),
+}
+
+/// Parameters of the virtual-leader formation (seed 000). The desired formation is the start
+/// layout (`robots.start`), centred on the virtual leader.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FormationConfig {
+    /// Constant linear speed v in m/s (section 4.1: only the heading changes).
+    #[serde(default = "default_formation_speed")]
+    pub speed: f64,
+    /// Turn angle w per step, degrees (the paper's "angle w": 1, 5, 10, 20).
+    #[serde(default = "default_turn_deg")]
+    pub turn_deg: f64,
+    /// An observer reports an obstacle when a ray of its cone hits closer than this (metres).
+    #[serde(default = "default_detect_range")]
+    pub detect_range: f64,
+    /// Half-width of each observer's lidar cone, degrees.
+    #[serde(default = "default_cone_deg")]
+    pub cone_deg: f64,
+    /// How far the side observers' cones point outward, degrees ("slightly to either side").
+    #[serde(default = "default_side_offset_deg")]
+    pub side_offset_deg: f64,
+    /// Epsilon-greedy probability of the opposite turn when an obstacle is seen (0.1 %).
+    #[serde(default = "default_epsilon_obstacle")]
+    pub epsilon_obstacle: f64,
+    /// Epsilon-greedy probability of the opposite turn when nothing is seen (1 %).
+    #[serde(default = "default_epsilon_clear")]
+    pub epsilon_clear: f64,
+    /// How far ahead of its slot, along the swarm heading, a robot steers (metres).
+    #[serde(default = "one")]
+    pub lookahead: f64,
+    /// A neighbour whose last beacon is older than this many ticks is left out (down or gone).
+    #[serde(default = "default_stale_ticks")]
+    pub stale_ticks: u32,
+    /// An observer's lidar verdict counts for this many ticks after it was sent.
+    #[serde(default = "default_verdict_ticks")]
+    pub verdict_ticks: u32,
+}
+
+impl Default for FormationConfig {
+    fn default() -> Self {
+        FormationConfig {
+            speed: default_formation_speed(),
+            turn_deg: default_turn_deg(),
+            detect_range: default_detect_range(),
+            cone_deg: default_cone_deg(),
+            side_offset_deg: default_side_offset_deg(),
+            epsilon_obstacle: default_epsilon_obstacle(),
+            epsilon_clear: default_epsilon_clear(),
+            lookahead: one(),
+            stale_ticks: default_stale_ticks(),
+            verdict_ticks: default_verdict_ticks(),
+        }
+    }
+}
+
+fn default_formation_speed() -> f64 {
+    0.5
+}
+fn default_turn_deg() -> f64 {
+    5.0
+}
+fn default_detect_range() -> f64 {
+    2.0
+}
+fn default_cone_deg() -> f64 {
+    25.0
+}
+fn default_side_offset_deg() -> f64 {
+    20.0
+}
+fn default_epsilon_obstacle() -> f64 {
+    0.001
+}
+fn default_epsilon_clear() -> f64 {
+    0.01
+}
+fn default_stale_ticks() -> u32 {
+    20
+}
+fn default_verdict_ticks() -> u32 {
+    3
 }
 
 impl Default for BehaviourConfig {
@@ -506,12 +593,19 @@ impl Config {
                 message,
             })?;
         }
+        let behaviour = table.get("behaviour").cloned();
         let config: Config =
             serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+                let key = e.path().to_string().trim_start_matches('.').to_string();
+                // serde buffers a tagged enum, which hides the field's path: find it again.
+                let (key, message) = match behaviour.as_ref().filter(|_| key == "behaviour") {
+                    Some(b) => behaviour_error(b).unwrap_or((key, e.inner().to_string())),
+                    None => (key, e.inner().to_string()),
+                };
                 ConfigError {
                     file: file.to_string(),
-                    key: e.path().to_string().trim_start_matches('.').to_string(),
-                    message: one_line(&e.inner().to_string()),
+                    key,
+                    message: one_line(&message),
                 }
             })?;
         config.validate().map_err(|(key, message)| ConfigError {
@@ -646,6 +740,8 @@ impl Config {
         range_u64("radio.jitter_ticks", q.jitter_ticks as u64, 0, 10_000)?;
         range_u64("radio.capacity", q.capacity as u64, 1, MAX_OUTBOX as u64)?;
 
+        self.faults.validate(self.robots.count)?;
+
         match &self.behaviour {
             BehaviourConfig::Goto(g) => {
                 range_f("behaviour.speed", g.speed, 0.0, 1000.0)?;
@@ -657,6 +753,24 @@ impl Config {
                     1_000_000,
                 )?;
                 range_f("behaviour.slot_spacing", g.slot_spacing, 0.0, 1e6)?;
+            }
+            BehaviourConfig::Formation(f) => {
+                range_f("behaviour.speed", f.speed, 0.0, self.robots.max_speed)?;
+                let max_turn = (self.robots.max_turn_rate * self.scenario.dt).to_degrees();
+                range_f("behaviour.turn_deg", f.turn_deg, 0.0, max_turn.min(180.0))?;
+                range_f("behaviour.detect_range", f.detect_range, 0.0, 1e6)?;
+                range_f("behaviour.cone_deg", f.cone_deg, 0.0, 180.0)?;
+                range_f("behaviour.side_offset_deg", f.side_offset_deg, -90.0, 90.0)?;
+                range_f("behaviour.epsilon_obstacle", f.epsilon_obstacle, 0.0, 1.0)?;
+                range_f("behaviour.epsilon_clear", f.epsilon_clear, 0.0, 1.0)?;
+                range_f("behaviour.lookahead", f.lookahead, 0.0, 1e6)?;
+                range_u64("behaviour.stale_ticks", f.stale_ticks as u64, 1, 1_000_000)?;
+                range_u64(
+                    "behaviour.verdict_ticks",
+                    f.verdict_ticks as u64,
+                    1,
+                    1_000_000,
+                )?;
             }
         }
         if let Some(c) = &self.consensus {
@@ -752,6 +866,26 @@ pub fn nearest_grid_points(
 
 fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Re-reads a `[behaviour]` table that failed as the struct its `kind` names, to report the
+/// failing field as `behaviour.<field>`.
+fn behaviour_error(b: &toml::Value) -> Option<(String, String)> {
+    let mut fields = b.as_table()?.clone();
+    let kind = fields.remove("kind")?;
+    let fields = toml::Value::Table(fields);
+    let err = match kind.as_str()? {
+        "goto" => serde_path_to_error::deserialize::<_, GotoConfig>(fields).err()?,
+        "formation" => serde_path_to_error::deserialize::<_, FormationConfig>(fields).err()?,
+        _ => return None,
+    };
+    let path = err.path().to_string();
+    let key = if path.is_empty() || path == "." {
+        "behaviour".to_string()
+    } else {
+        format!("behaviour.{}", path.trim_start_matches('.'))
+    };
+    Some((key, err.inner().to_string()))
 }
 
 pub(crate) fn check(ok: bool, key: &str, expected: &str) -> Result<(), (String, String)> {
@@ -942,5 +1076,27 @@ count = 4
         assert_eq!(c.start_positions(|_, _| true), None);
         let c = load(MINIMAL, &["robots.count=100"]).unwrap();
         assert_eq!(c.start_positions(|_, _| true).unwrap().len(), 100);
+    }
+
+    #[test]
+    fn a_bad_behaviour_field_is_named_despite_the_tagged_enum() {
+        let e = load(
+            MINIMAL,
+            &["behaviour.kind=\"formation\"", "behaviour.turn_deg=\"x\""],
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "behaviour.turn_deg", "{e}");
+        let e = load(
+            MINIMAL,
+            &["behaviour.kind=\"formation\"", "behaviour.turn_dg=1"],
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "behaviour.turn_dg", "{e}");
+        let e = load(
+            MINIMAL,
+            &["behaviour.kind=\"formation\"", "behaviour.speed=50"],
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "behaviour.speed", "{e}");
     }
 }

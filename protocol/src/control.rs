@@ -30,6 +30,12 @@ pub enum Report {
         /// Milliseconds from `Listening` until the last hello.
         startup_ms: u64,
     },
+    /// The fault schedule killed this robot at the tick boundary: SIGKILL its process. The
+    /// world already counts it dead, so the run replays whatever the signal's timing.
+    Kill {
+        /// The robot.
+        robot: u32,
+    },
     /// Progress, sent at most a few times a second.
     Tick {
         /// The tick just completed.

@@ -23,11 +23,13 @@ pub mod child;
 pub mod config;
 pub mod consensus;
 pub mod control;
+pub mod faults;
 pub mod ipc;
 pub mod logging;
 pub mod messages;
 pub mod radio_msg;
 pub mod report;
+pub mod rng;
 pub mod services;
 
 pub use messages::*;

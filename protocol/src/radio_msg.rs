@@ -15,6 +15,24 @@ pub enum RadioMsg {
         /// Sender's estimated heading in radians.
         theta: f64,
     },
+    /// The formation's per-tick message (seed 000): pose for the virtual leader estimate,
+    /// the sender's swarm heading, and its observer role and lidar verdict.
+    Formation {
+        /// Sender's x in metres.
+        x: f64,
+        /// Sender's y in metres.
+        y: f64,
+        /// Sender's heading in radians.
+        theta: f64,
+        /// Sender's speed in m/s (receivers extrapolate stale poses with it).
+        v: f64,
+        /// The swarm heading the sender holds, radians.
+        psi: f64,
+        /// The observer role the sender's lidar was on for: 0 none, 1 middle, 2 left, 3 right.
+        role: u8,
+        /// Non-zero when that lidar saw an obstacle in the role's cone.
+        obstacle: u8,
+    },
     /// Election, replicated log and leader choice (`crate::consensus`).
     Consensus(crate::consensus::ConsensusMsg),
 }
@@ -29,6 +47,7 @@ impl RadioMsg {
     pub fn kind(&self) -> &'static str {
         match self {
             RadioMsg::Beacon { .. } => "beacon",
+            RadioMsg::Formation { .. } => "formation",
             RadioMsg::Consensus(m) => m.kind(),
         }
     }

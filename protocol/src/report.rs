@@ -30,3 +30,10 @@ pub enum Note {
     /// Consensus state changes and log events.
     Consensus(ConsensusNote),
 }
+
+impl Note {
+    /// True when the robot says it is the leader now (the target of a `"leader"` fault).
+    pub fn claims_leadership(&self) -> bool {
+        matches!(self, Note::Consensus(c) if c.claims_leadership())
+    }
+}

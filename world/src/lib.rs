@@ -40,6 +40,7 @@ pub mod radio;
 pub mod records;
 pub mod rng;
 pub mod shell;
+pub mod timing;
 pub mod world;
 
 pub use world::{Event, Robot, World, WorldMetrics};

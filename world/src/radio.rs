@@ -89,6 +89,8 @@ pub struct RadioStats {
     pub dropped_receiver_down: u64,
     /// Copies due when the receiver's inbox already held `MAX_INBOX` frames.
     pub dropped_inbox_full: u64,
+    /// Copies between robots a scheduled partition or blackout kept apart.
+    pub dropped_partition: u64,
     /// Copies routed but not yet due.
     pub in_flight: u64,
 }
@@ -102,6 +104,7 @@ enum Reason {
     LineOfSight,
     ReceiverDown,
     InboxFull,
+    Partition,
 }
 
 impl RadioStats {
@@ -114,6 +117,7 @@ impl RadioStats {
             Reason::LineOfSight => self.dropped_line_of_sight += 1,
             Reason::ReceiverDown => self.dropped_receiver_down += 1,
             Reason::InboxFull => self.dropped_inbox_full += 1,
+            Reason::Partition => self.dropped_partition += 1,
         }
     }
 }
@@ -241,6 +245,8 @@ pub struct RadioMedium {
     grid: Grid,
     scratch: Vec<u32>,
     stats: RadioStats,
+    /// Radio group per robot while a partition or blackout is on; different groups are apart.
+    groups: Option<Vec<u64>>,
 }
 
 impl RadioMedium {
@@ -254,6 +260,7 @@ impl RadioMedium {
             seq: 0,
             bad_links: BTreeSet::new(),
             grid: Grid::default(),
+            groups: None,
             scratch: Vec::new(),
             stats: RadioStats::default(),
         }
@@ -346,6 +353,14 @@ impl RadioMedium {
         copy: Frame,
         blocked: &mut dyn FnMut(usize, usize) -> bool,
     ) {
+        if self
+            .groups
+            .as_ref()
+            .is_some_and(|g| g.get(src) != g.get(dst))
+        {
+            self.stats.count_drop(Reason::Partition);
+            return;
+        }
         if self.cfg.line_of_sight && blocked(src, dst) {
             self.stats.count_drop(Reason::LineOfSight);
             return;
@@ -370,6 +385,11 @@ impl RadioMedium {
         });
         self.seq += 1;
         self.stats.in_flight += 1;
+    }
+
+    /// Sets the radio groups for the following sends (`None`: everyone may hear everyone).
+    pub fn set_groups(&mut self, groups: Option<Vec<u64>>) {
+        self.groups = groups;
     }
 
     /// Draws the loss of one copy on the directed link `src -> dst`.
@@ -474,7 +494,8 @@ mod tests {
                 + s.dropped_capacity
                 + s.dropped_line_of_sight
                 + s.dropped_receiver_down
-                + s.dropped_inbox_full,
+                + s.dropped_inbox_full
+                + s.dropped_partition,
             "{s:?}"
         );
     }

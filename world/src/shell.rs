@@ -20,6 +20,7 @@ use swarmrt_protocol::{
 };
 
 use crate::records::Recorder;
+use crate::timing::{TickPhases, TickTimer, TickTiming};
 use crate::world::World;
 
 /// Longest the world waits for all robots to say hello.
@@ -38,6 +39,8 @@ pub struct ShellStats {
     pub extra_commands: u64,
     /// Hellos that claimed an id already taken, or came from an already bound publisher.
     pub bad_hello: u64,
+    /// Wall-clock cost of the ticks and where it went.
+    pub timing: TickTiming,
 }
 
 /// Sleeps until the command event fires or `timeout` passes. A termination signal arriving
@@ -182,11 +185,20 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
     let mut obs = vec![Observation::empty(0, 0); n];
     let mut commands: Vec<Option<Command>> = vec![None; n];
     let mut last_progress = Instant::now();
+    // The first tick is reported at once: the orchestrator learns that every process is up
+    // and ticking (`swarm bench swarm` reads memory then).
+    let mut first_report = true;
+    let mut timer = TickTimer::default();
     let events = world.drain_events();
     recorder.record(world.tick(), world.robots(), &events)?;
     while !interrupted && !world.finished() {
+        for robot in world.take_kills() {
+            report(&Report::Kill { robot });
+        }
         let tick = world.tick();
+        let t0 = Instant::now();
         world.observe(&mut obs);
+        let t1 = Instant::now();
         let sample = publisher.loan_slice_uninit(n)?;
         let mut sample = sample.write_from_slice(&obs);
         *sample.user_header_mut() = ObservationHeader {
@@ -196,6 +208,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
         };
         sample.send()?;
         obs_notifier.notify()?;
+        let t2 = Instant::now();
 
         commands.iter_mut().for_each(|c| *c = None);
         let mut waiting: BTreeSet<u32> = world
@@ -250,10 +263,22 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
         if interrupted {
             break;
         }
+        let t3 = Instant::now();
         world.step(&commands);
         let events = world.drain_events();
+        let t4 = Instant::now();
         recorder.record(world.tick(), world.robots(), &events)?;
-        if last_progress.elapsed() >= PROGRESS_EVERY {
+        let t5 = Instant::now();
+        let ns = |a: Instant, b: Instant| (b - a).as_nanos() as u64;
+        timer.add(TickPhases {
+            observe: ns(t0, t1),
+            publish: ns(t1, t2),
+            wait: ns(t2, t3),
+            step: ns(t3, t4),
+            record: ns(t4, t5),
+        });
+        if first_report || last_progress.elapsed() >= PROGRESS_EVERY {
+            first_report = false;
             last_progress = Instant::now();
             report(&Report::Tick { tick: world.tick() });
         }
@@ -271,6 +296,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
     obs_notifier.notify()?;
     // Deaths marked after the last recorded tick: events only, the tick's rows exist.
     recorder.record_events(&world.drain_events())?;
+    stats.timing = timer.summary();
     let mut metrics = serde_json::to_value(world.metrics())?;
     metrics["shell"] = serde_json::to_value(&stats)?;
     report(&Report::Tick { tick: world.tick() });

@@ -7,6 +7,7 @@ use serde::Serialize;
 use std::collections::BTreeSet;
 use std::f64::consts::PI;
 use swarmrt_protocol::config::Config;
+use swarmrt_protocol::faults::FaultTarget;
 use swarmrt_protocol::{
     BROADCAST, Command, CommandKind, Frame, MAX_INBOX, MAX_LIDAR_RAYS, MAX_NEIGHBOURS, MAX_OUTBOX,
     MAX_PAYLOAD, Neighbour, Note, Observation, PROTOCOL_VERSION, RobotState,
@@ -70,6 +71,17 @@ pub enum Event {
         /// Why (e.g. "process exited: signal 9").
         reason: String,
     },
+    /// A scheduled fault took effect (`kill`) or began or ended (`partition`, `blackout`).
+    Fault {
+        /// Tick from which it holds.
+        tick: u64,
+        /// `kill`, `partition_start`, `partition_end`, `blackout_start`, `blackout_end`, or
+        /// `kill_skipped` when a `"leader"` target had no live leader.
+        fault: String,
+        /// The robot, for a kill.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        robot: Option<u32>,
+    },
     /// A robot's note about its own decisions (role, turn, consensus state).
     Note {
         /// Tick of the command that carried it.
@@ -107,6 +119,8 @@ pub struct WorldMetrics {
     pub lidar_on_ticks: u64,
     /// Commands refused at the world boundary.
     pub rejected: u64,
+    /// Scheduled faults that took effect (kills, partitions and blackouts begun).
+    pub faults_injected: u64,
     /// Radio counters.
     pub radio: RadioStats,
 }
@@ -123,6 +137,10 @@ pub struct World {
     events: Vec<Event>,
     rejected_once: BTreeSet<(u32, &'static str)>,
     metrics: WorldMetrics,
+    /// The robot that last reported itself leader (the target of a `"leader"` fault).
+    leader: Option<u32>,
+    /// Robots killed by the schedule whose processes the shell must still signal.
+    kills: Vec<u32>,
 }
 
 /// Wraps an angle into (-pi, pi].
@@ -181,9 +199,12 @@ impl World {
             events: Vec::new(),
             rejected_once: BTreeSet::new(),
             metrics: WorldMetrics::default(),
+            leader: None,
+            kills: Vec::new(),
             robots,
         };
         world.check_goal();
+        world.apply_faults();
         Ok(world)
     }
 
@@ -405,6 +426,9 @@ impl World {
                         accepted[i] = Some(cmd);
                         // validate() decoded it once already; this cannot fail.
                         for note in cmd.notes().unwrap_or_default() {
+                            if note.claims_leadership() {
+                                self.leader = Some(i as u32);
+                            }
                             self.events.push(Event::Note {
                                 tick,
                                 robot: i as u32,
@@ -519,6 +543,69 @@ impl World {
             .collect();
         self.radio.deliver(self.tick, &can_talk, &mut self.inboxes);
         self.check_goal();
+        self.apply_faults();
+    }
+
+    /// Robots the schedule killed since the last call: the process shell SIGKILLs them (via
+    /// the orchestrator); the world already counts them dead.
+    pub fn take_kills(&mut self) -> Vec<u32> {
+        std::mem::take(&mut self.kills)
+    }
+
+    /// Applies the faults scheduled at the current tick boundary.
+    fn apply_faults(&mut self) {
+        let tick = self.tick;
+        let faults = std::mem::take(&mut self.cfg.faults);
+        for k in faults.kill.iter().filter(|k| k.tick == tick) {
+            let target = match &k.robot {
+                FaultTarget::Id(id) => Some(*id),
+                FaultTarget::Named(_) => self.leader,
+            };
+            let alive = target.filter(|&r| {
+                self.robots
+                    .get(r as usize)
+                    .is_some_and(|r| r.state != RobotState::Dead)
+            });
+            match alive {
+                Some(robot) => {
+                    self.metrics.faults_injected += 1;
+                    self.events.push(Event::Fault {
+                        tick,
+                        fault: "kill".into(),
+                        robot: Some(robot),
+                    });
+                    self.mark_dead(robot, "fault: kill");
+                    self.kills.push(robot);
+                }
+                None => self.events.push(Event::Fault {
+                    tick,
+                    fault: "kill_skipped".into(),
+                    robot: target,
+                }),
+            }
+        }
+        let windows = faults
+            .partition
+            .iter()
+            .map(|p| ("partition", p.from, p.to))
+            .chain(faults.blackout.iter().map(|b| ("blackout", b.from, b.to)));
+        for (kind, from, to) in windows {
+            for (at, phase) in [(from, "start"), (to, "end")] {
+                if at == tick {
+                    if phase == "start" {
+                        self.metrics.faults_injected += 1;
+                    }
+                    self.events.push(Event::Fault {
+                        tick,
+                        fault: format!("{kind}_{phase}"),
+                        robot: None,
+                    });
+                }
+            }
+        }
+        self.radio
+            .set_groups(faults.radio_groups(tick, self.robots.len()));
+        self.cfg.faults = faults;
     }
 
     fn check_goal(&mut self) {

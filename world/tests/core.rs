@@ -3,7 +3,7 @@
 
 use std::f64::consts::PI;
 use swarmrt_protocol::config::Config;
-use swarmrt_protocol::{BROADCAST, Command, MAX_OUTBOX, Observation, RadioMsg, RobotState};
+use swarmrt_protocol::{BROADCAST, Command, MAX_OUTBOX, Note, Observation, RadioMsg, RobotState};
 use swarmrt_world::{Event, World};
 
 /// A message to fill outboxes with.
@@ -117,6 +117,44 @@ fn nan_wrong_version_wrong_tick_and_bad_frames_are_rejected() {
     assert_eq!(
         w.validate(1, &good),
         Err("robot id does not match its slot")
+    );
+    let mut c = good;
+    c.set_notes(&[Note::EpsilonFlip]).unwrap();
+    c.report[0] = 250;
+    assert_eq!(w.validate(0, &c), Err("malformed report"));
+    let mut c = good;
+    c.report_len = u16::MAX;
+    assert_eq!(w.validate(0, &c), Err("report length out of range"));
+}
+
+#[test]
+fn notes_are_recorded_as_events_of_their_tick() {
+    let mut w = World::new(&config(&[])).unwrap();
+    let mut obs = vec![Observation::empty(0, 0); 1];
+    w.observe(&mut obs);
+    let mut c = Command::act(0, 0);
+    c.set_notes(&[Note::Role { role: 2 }, Note::EpsilonFlip])
+        .unwrap();
+    w.step(&[Some(c)]);
+    let notes: Vec<_> = w
+        .drain_events()
+        .into_iter()
+        .filter(|e| matches!(e, Event::Note { .. }))
+        .collect();
+    assert_eq!(
+        notes,
+        vec![
+            Event::Note {
+                tick: 0,
+                robot: 0,
+                note: Note::Role { role: 2 }
+            },
+            Event::Note {
+                tick: 0,
+                robot: 0,
+                note: Note::EpsilonFlip
+            },
+        ]
     );
 }
 

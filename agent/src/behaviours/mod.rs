@@ -6,6 +6,7 @@ use swarmrt_protocol::{Command, Observation};
 
 use crate::agent::Decoded;
 
+pub mod formation;
 pub mod goto;
 
 /// A robot behaviour: a deterministic state machine.

@@ -1,0 +1,212 @@
+//! The floor: the runtime's lock-step loop with nothing in it. The same services
+//! (`protocol::ipc::create_services`: one observation slice publisher + one event to wake all
+//! robots, one shared command service + event back), the same message types and sizes, the
+//! same processes; but the world publishes a prepared slice instead of computing one, and a
+//! robot answers `Command::act` at once instead of thinking. What the runtime costs beyond
+//! this is the world and robot cores and the shells' bookkeeping.
+
+use std::time::{Duration, Instant};
+
+use anyhow::bail;
+use iceoryx2::prelude::*;
+use serde::{Deserialize, Serialize};
+use swarmrt_protocol::ipc as proto_ipc;
+use swarmrt_protocol::services::{EVENT_COMMAND, RunServices};
+use swarmrt_protocol::{Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION};
+
+use super::child::{ChildMsg, say};
+use super::fanout::own_fds;
+use super::stats::{Summary, summarize};
+use super::transports::idle_wait;
+use super::{PEER_TIMEOUT, bench_node, iox};
+
+/// What the floor world measured.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FloorResult {
+    /// Robot processes.
+    pub robots: usize,
+    /// Ticks run.
+    pub ticks: u64,
+    /// Milliseconds from services created to the last hello (spawning the robots included).
+    pub startup_ms: f64,
+    /// Seconds of ticking.
+    pub secs: f64,
+    /// Whole tick (publish + wait for every answer), ns.
+    pub tick_ns: Summary,
+    /// Mean ns spent loaning, writing, sending and notifying.
+    pub publish_ns_mean: f64,
+    /// Mean ns from the notify until the last answer was drained.
+    pub wait_ns_mean: f64,
+    /// Open descriptors of the world process mid-run.
+    pub world_fds: usize,
+}
+
+/// The floor world child.
+pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
+    if let Err(e) = proto_ipc::raise_fd_limit() {
+        tracing::warn!("cannot raise the open-file limit: {e}");
+    }
+    let node = bench_node(run, &run.world_node_name())?;
+    let s = proto_ipc::create_services(&node, run, n).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let publisher = iox(
+        s.observations
+            .publisher_builder()
+            .initial_max_slice_len(n)
+            .override_sample_preallocation(|_| proto_ipc::OBSERVATION_SAMPLES)
+            .create(),
+        "publisher",
+    )?;
+    let notifier = iox(s.observations_event.notifier_builder().create(), "notifier")?;
+    let commands = iox(s.commands.subscriber_builder().create(), "subscriber")?;
+    let listener = iox(s.commands_event.listener_builder().create(), "listener")?;
+    say(&ChildMsg::Ready { addr: None })?;
+
+    let ready_at = Instant::now();
+    let limit = PEER_TIMEOUT + Duration::from_millis(100) * n as u32;
+    let mut hello = vec![false; n];
+    let mut missing = n;
+    while missing > 0 {
+        while let Some(c) = iox(commands.receive(), "receive")? {
+            let c = *c.payload();
+            if CommandKind::from_u32(c.kind) == Some(CommandKind::Hello)
+                && let Some(h) = hello.get_mut(c.robot as usize)
+                && !*h
+            {
+                *h = true;
+                missing -= 1;
+            }
+        }
+        if missing == 0 {
+            break;
+        }
+        if ready_at.elapsed() > limit {
+            bail!("{missing} of {n} floor robots never said hello");
+        }
+        iox(
+            listener.timed_wait(|_| {}, Duration::from_millis(500)),
+            "wait",
+        )?;
+    }
+    let startup_ms = ready_at.elapsed().as_secs_f64() * 1e3;
+
+    let obs: Vec<Observation> = (0..n as u32).map(|i| Observation::empty(i, 0)).collect();
+    let mut answered = vec![u64::MAX; n];
+    let mut tick_ns = Vec::with_capacity(ticks as usize);
+    let (mut publish_sum, mut wait_sum) = (0u128, 0u128);
+    let mut world_fds = 0;
+    let mut sampled = false;
+    let start = Instant::now();
+    for tick in 0..ticks {
+        let t0 = Instant::now();
+        let sample = iox(publisher.loan_slice_uninit(n), "loan")?;
+        let mut sample = sample.write_from_slice(&obs);
+        *sample.user_header_mut() = ObservationHeader {
+            version: PROTOCOL_VERSION,
+            shutdown: 0,
+            tick,
+        };
+        iox(sample.send(), "send")?;
+        iox(notifier.notify(), "notify")?;
+        let t1 = Instant::now();
+        let mut pending = n;
+        loop {
+            while let Some(c) = iox(commands.receive(), "receive")? {
+                let c = *c.payload();
+                if c.tick == tick
+                    && CommandKind::from_u32(c.kind) == Some(CommandKind::Act)
+                    && let Some(a) = answered.get_mut(c.robot as usize)
+                    && *a != tick
+                {
+                    *a = tick;
+                    pending -= 1;
+                }
+            }
+            if pending == 0 {
+                break;
+            }
+            let waited = t1.elapsed();
+            if waited > PEER_TIMEOUT {
+                bail!("{pending} floor robots did not answer tick {tick}");
+            }
+            iox(listener.timed_wait(|_| {}, PEER_TIMEOUT - waited), "wait")?;
+        }
+        let t2 = Instant::now();
+        tick_ns.push((t2 - t0).as_nanos() as u64);
+        publish_sum += (t1 - t0).as_nanos();
+        wait_sum += (t2 - t1).as_nanos();
+        // After the first tick, as the runtime's world reports its first tick: the parent
+        // reads memory now.
+        if !sampled {
+            sampled = true;
+            world_fds = own_fds();
+            say(&ChildMsg::Progress)?;
+        }
+    }
+    let secs = start.elapsed().as_secs_f64();
+    if !sampled {
+        world_fds = own_fds();
+    }
+    let sample = iox(publisher.loan_slice_uninit(0), "loan")?;
+    let mut sample = sample.write_from_slice(&[]);
+    *sample.user_header_mut() = ObservationHeader {
+        version: PROTOCOL_VERSION,
+        shutdown: 1,
+        tick: ticks,
+    };
+    iox(sample.send(), "send")?;
+    iox(notifier.notify(), "notify")?;
+    let count = ticks.max(1) as f64;
+    let result = FloorResult {
+        robots: n,
+        ticks,
+        startup_ms,
+        secs,
+        tick_ns: summarize(&mut tick_ns),
+        publish_ns_mean: publish_sum as f64 / count,
+        wait_ns_mean: wait_sum as f64 / count,
+        world_fds,
+    };
+    say(&ChildMsg::Result {
+        value: serde_json::to_value(result)?,
+    })
+}
+
+/// The floor robot child: hello, then answer every tick at once until shutdown.
+pub fn agent(run: &RunServices, id: u32) -> anyhow::Result<()> {
+    let node = bench_node(run, &run.robot_node_name(id))?;
+    let s = proto_ipc::open_services(&node, run).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let subscriber = iox(s.observations.subscriber_builder().create(), "subscriber")?;
+    let listener = iox(s.observations_event.listener_builder().create(), "listener")?;
+    let publisher = iox(s.commands.publisher_builder().create(), "publisher")?;
+    let notifier = iox(
+        s.commands_event
+            .notifier_builder()
+            .default_event_id(EventId::new(EVENT_COMMAND))
+            .create(),
+        "notifier",
+    )?;
+    iox(
+        publisher.send_copy(Command::hello(id, std::process::id())),
+        "hello",
+    )?;
+    iox(notifier.notify(), "notify")?;
+    loop {
+        while let Some(sample) = iox(subscriber.receive(), "receive")? {
+            let header = *sample.user_header();
+            if header.shutdown != 0 {
+                return Ok(());
+            }
+            // Read the own slot, as a robot does.
+            let Some(robot) = sample.payload().get(id as usize).map(|o| o.robot) else {
+                bail!("observation sample has no slot for robot {id}");
+            };
+            drop(sample);
+            iox(
+                publisher.send_copy(Command::act(robot, header.tick)),
+                "send",
+            )?;
+            iox(notifier.notify(), "notify")?;
+        }
+        idle_wait(&listener)?;
+    }
+}

@@ -1,0 +1,756 @@
+//! `swarm bench swarm`: for each robot count N, the real runtime (world + N robot processes,
+//! `processes::run`, exactly what `swarm run` does) and the floor (the same services and
+//! processes with empty cores, [`super::floor`]); then the same cores in-process.
+//!
+//! Tick numbers come from the world's own timing (`shell.timing` in its metrics): the ticks
+//! and their wall time, not the start-up or shutdown around them. Memory is read once per run
+//! from `/proc/<pid>/smaps_rollup` of every process, when the world reports its first tick
+//! (every process is up and has handled one tick; the run goes on meanwhile).
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use serde::{Deserialize, Serialize};
+use swarmrt_agent::Agent;
+use swarmrt_protocol::Observation;
+use swarmrt_protocol::config::Config;
+use swarmrt_world::World;
+
+use super::child::{ChildMsg, ChildSpec};
+use super::floor::FloorResult;
+use super::plot::{Panel, Series, write_figure};
+use super::procs::{Children, Memory, memory, my_children, open_fds};
+use super::{
+    BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_rate, machine, make_out_dir,
+    progress, write_json,
+};
+use crate::commands::bench::SwarmArgs;
+use crate::error::{SwarmError, SwarmResult};
+use crate::{processes, run_dir};
+
+/// Longest an in-process measurement steps, whatever `--in-process-ticks` says.
+const IN_PROCESS_BUDGET: Duration = Duration::from_secs(20);
+/// Most robot processes this command starts (each costs ~1.4 MB PSS and a few descriptors
+/// in the world; see docs/benchmarks.md for where it stops).
+pub const MAX_PROCESS_AGENTS: u32 = 5_000;
+
+/// The runtime at one N.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct RuntimeRow {
+    /// Robot processes.
+    pub agents: u32,
+    /// Ticks the world stepped.
+    pub ticks: u64,
+    /// Ticks per second while ticking.
+    pub ticks_per_s: f64,
+    /// Median tick, ms.
+    pub tick_ms_median: f64,
+    /// 99th percentile tick, ms.
+    pub tick_ms_p99: f64,
+    /// Mean ms per tick in each phase of the world's loop.
+    pub phases_ms: serde_json::Value,
+    /// From the world's services existing to the last robot's hello (spawning included), ms.
+    pub startup_ms: Option<f64>,
+    /// Memory of the world and all robots.
+    pub memory: Option<Memory>,
+    /// Open descriptors of the world process.
+    pub world_fds: Option<usize>,
+    /// Wall seconds of the whole run (start-up, ticks, shutdown).
+    pub wall_secs: f64,
+    /// The run directory.
+    pub dir: String,
+    /// Set when the run failed.
+    pub error: Option<String>,
+}
+
+/// The floor at one N.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct FloorRow {
+    /// Robot processes.
+    pub agents: u32,
+    /// What the floor world measured.
+    pub result: Option<FloorResult>,
+    /// Ticks per second while ticking.
+    pub ticks_per_s: f64,
+    /// Memory of the floor world and all floor robots.
+    pub memory: Option<Memory>,
+    /// Set when the floor failed.
+    pub error: Option<String>,
+}
+
+/// Runtime against floor at one N.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Comparison {
+    /// Robot processes.
+    pub agents: u32,
+    /// Runtime median tick / floor median tick.
+    pub median_ratio: f64,
+    /// Runtime p99 tick / floor p99 tick.
+    pub p99_ratio: f64,
+}
+
+/// In-process at one N.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct InProcessRow {
+    /// Robots.
+    pub agents: u32,
+    /// Ticks stepped.
+    pub ticks: u64,
+    /// Seconds building the world and the agents.
+    pub setup_secs: f64,
+    /// Seconds stepping.
+    pub secs: f64,
+    /// agents * ticks / secs.
+    pub robot_steps_per_s: f64,
+    /// Mean ms per tick in `World::observe`.
+    pub observe_ms: f64,
+    /// Mean ms per tick in all `Agent::step` calls.
+    pub agents_ms: f64,
+    /// Mean ms per tick in `World::step`.
+    pub step_ms: f64,
+    /// Radio copies sent per tick (the medium's load).
+    pub radio_copies_per_tick: f64,
+    /// Set when the measurement failed.
+    pub error: Option<String>,
+}
+
+/// Everything `swarm bench swarm` measured.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct SwarmReport {
+    /// The machine.
+    pub machine: serde_json::Value,
+    /// The scenario file.
+    pub config: String,
+    /// Lock-step ticks per run.
+    pub ticks: u64,
+    /// The runtime, per N.
+    pub runtime: Vec<RuntimeRow>,
+    /// The floor, per N.
+    pub floor: Vec<FloorRow>,
+    /// Runtime / floor, per N.
+    pub comparison: Vec<Comparison>,
+    /// In-process, per N.
+    pub in_process: Vec<InProcessRow>,
+    /// Run ids used (their iceoryx2 roots and shared memory are gone afterwards).
+    pub run_ids: Vec<String>,
+    /// Where the results were written.
+    pub out: String,
+    /// Wall seconds of the whole benchmark.
+    pub wall_secs: f64,
+}
+
+/// The scenario at `n` robots: `base` with the count, the tick budget, no early stop, and a
+/// square map around the start grid big enough for the start layout and the goal slots.
+pub fn scenario(base: &Path, n: u32, ticks: u64) -> SwarmResult<Config> {
+    let cfg = Config::load(base, &[])?;
+    let spacing = cfg.robots.start.spacing;
+    let r_start = (n as f64 / std::f64::consts::PI).sqrt() * spacing + 1.0;
+    let side = (2.0 * r_start + 6.0).max(12.0).ceil();
+    let centre = side / 2.0;
+    let goal = centre + r_start / 2.0;
+    let set = vec![
+        format!("robots.count={n}"),
+        format!("scenario.ticks={ticks}"),
+        "scenario.stop_when_done=false".to_string(),
+        format!("map.bounds=[0.0, 0.0, {side:.1}, {side:.1}]"),
+        format!("robots.start.x={centre:.1}"),
+        format!("robots.start.y={centre:.1}"),
+        format!("map.goal.x={goal:.1}"),
+        format!("map.goal.y={goal:.1}"),
+    ];
+    crate::commands::run::load_config(base, &set)
+}
+
+fn validate(args: &SwarmArgs) -> SwarmResult<()> {
+    let user = |m: String| Err(SwarmError::User(m));
+    if args
+        .agents
+        .iter()
+        .any(|&n| n == 0 || n > MAX_PROCESS_AGENTS)
+    {
+        return user(format!(
+            "--agents: expected robot counts in 1..={MAX_PROCESS_AGENTS}, got {:?}",
+            args.agents
+        ));
+    }
+    if args.ticks == 0 || args.ticks > 10_000_000 {
+        return user(format!(
+            "--ticks: expected 1..=10000000, got {}",
+            args.ticks
+        ));
+    }
+    if args
+        .in_process_agents
+        .iter()
+        .any(|&n| n == 0 || n > swarmrt_protocol::config::MAX_ROBOTS)
+    {
+        return user(format!(
+            "--in-process-agents: expected robot counts in 1..={}, got {:?}",
+            swarmrt_protocol::config::MAX_ROBOTS,
+            args.in_process_agents
+        ));
+    }
+    if args.in_process_ticks == 0 {
+        return user("--in-process-ticks: expected at least 1".into());
+    }
+    Ok(())
+}
+
+/// `swarm bench swarm`.
+pub fn run(args: &SwarmArgs, interrupt: crossbeam_channel::Receiver<()>) -> SwarmResult<()> {
+    validate(args)?;
+    // Resolve every scenario first: a bad config or an impossible layout is a user error
+    // before anything starts.
+    let mut scenarios = Vec::new();
+    for &n in &args.agents {
+        scenarios.push((n, scenario(&args.config, n, args.ticks)?));
+    }
+    let mut in_proc = Vec::new();
+    for &n in &args.in_process_agents {
+        in_proc.push((n, scenario(&args.config, n, args.in_process_ticks)?));
+    }
+    let interrupt = Interrupt::new(interrupt);
+    let out = args.out.clone().unwrap_or_else(|| default_out("swarm"));
+    make_out_dir(&out)?;
+    let started = Instant::now();
+    let mut report = SwarmReport {
+        machine: machine(),
+        config: args.config.display().to_string(),
+        ticks: args.ticks,
+        out: out.display().to_string(),
+        ..SwarmReport::default()
+    };
+    let pb = progress((scenarios.len() * 2 + in_proc.len()) as u64);
+    for (n, cfg) in &scenarios {
+        pb.set_message(format!("runtime, {n} robots"));
+        let dir = out.join("runs").join(format!("n{n}"));
+        let row = runtime_run(cfg, &dir, &interrupt, &mut report.run_ids);
+        interrupt.check()?;
+        if let Some(e) = &row.error {
+            tracing::warn!("runtime with {n} robots failed: {e}");
+        }
+        report.runtime.push(row);
+        pb.inc(1);
+        pb.set_message(format!("floor, {n} robots"));
+        let row = floor_run(*n, args.ticks, &interrupt, &mut report.run_ids);
+        interrupt.check()?;
+        if let Some(e) = &row.error {
+            tracing::warn!("floor with {n} robots failed: {e}");
+        }
+        report.floor.push(row);
+        pb.inc(1);
+    }
+    report.comparison = report
+        .runtime
+        .iter()
+        .zip(&report.floor)
+        .filter_map(|(r, f)| {
+            let fr = f.result.as_ref()?;
+            (r.error.is_none()).then(|| Comparison {
+                agents: r.agents,
+                median_ratio: r.tick_ms_median / (fr.tick_ns.median / 1e6),
+                p99_ratio: r.tick_ms_p99 / (fr.tick_ns.p99 / 1e6),
+            })
+        })
+        .collect();
+    for (n, cfg) in &in_proc {
+        pb.set_message(format!("in-process, {n} robots"));
+        let row = in_process(cfg, &interrupt).unwrap_or_else(|e| InProcessRow {
+            agents: *n,
+            error: Some(format!("{e:#}")),
+            ..InProcessRow::default()
+        });
+        interrupt.check()?;
+        report.in_process.push(row);
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    report.wall_secs = started.elapsed().as_secs_f64();
+
+    let value = serde_json::to_value(&report).map_err(anyhow::Error::from)?;
+    write_json(&out.join("results.json"), &value)?;
+    if let Err(e) = plots(&report, &out) {
+        tracing::warn!("could not draw the plots: {e:#}");
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&value).map_err(anyhow::Error::from)?
+        );
+    } else {
+        print!("{}", table(&report));
+        println!("results: {}", out.display());
+    }
+    Ok(())
+}
+
+/// Memory of every child of this process and the world's descriptors, read now.
+fn sample_children() -> (Memory, Option<usize>) {
+    let kids = my_children();
+    let pids: Vec<u32> = kids.iter().map(|(p, _)| *p).collect();
+    let world = kids
+        .iter()
+        .find(|(_, cmd)| cmd.contains("swarm-world"))
+        .map(|(p, _)| open_fds(*p));
+    (memory(&pids), world)
+}
+
+fn runtime_run(
+    cfg: &Config,
+    dir: &Path,
+    interrupt: &Interrupt,
+    run_ids: &mut Vec<String>,
+) -> RuntimeRow {
+    let mut row = RuntimeRow {
+        agents: cfg.robots.count,
+        dir: dir.display().to_string(),
+        ..RuntimeRow::default()
+    };
+    let started = Instant::now();
+    let r = (|| -> anyhow::Result<()> {
+        let config_path = run_dir::prepare(dir, cfg)?;
+        let mut sampler: Option<std::thread::JoinHandle<(Memory, Option<usize>)>> = None;
+        let outcome = processes::run(cfg, &config_path, dir, interrupt.receiver(), |tick| {
+            if sampler.is_none() && tick > 0 {
+                sampler = Some(std::thread::spawn(sample_children));
+            }
+        })?;
+        run_ids.push(outcome.run_id.clone());
+        if let Some(s) = sampler
+            && let Ok((mem, fds)) = s.join()
+        {
+            row.memory = Some(mem);
+            row.world_fds = fds;
+        }
+        row.startup_ms = outcome.startup_ms.map(|v| v as f64);
+        if let Some(f) = &outcome.world_failure {
+            anyhow::bail!("{f}");
+        }
+        if outcome.interrupted {
+            anyhow::bail!("interrupted");
+        }
+        let metrics = outcome
+            .world_metrics
+            .context("the world reported no metrics")?;
+        let t = &metrics["shell"]["timing"];
+        let num = |k: &str| t[k].as_f64().unwrap_or(f64::NAN);
+        row.ticks = t["ticks"].as_u64().unwrap_or(0);
+        row.ticks_per_s = row.ticks as f64 / num("seconds");
+        row.tick_ms_median = num("tick_ms_median");
+        row.tick_ms_p99 = num("tick_ms_p99");
+        row.phases_ms = serde_json::json!({
+            "observe": num("observe_ms_mean"),
+            "publish": num("publish_ms_mean"),
+            "wait": num("wait_ms_mean"),
+            "step": num("step_ms_mean"),
+            "record": num("record_ms_mean"),
+        });
+        if !outcome.unscheduled_deaths.is_empty() {
+            anyhow::bail!(
+                "{} robot processes died: {:?}",
+                outcome.unscheduled_deaths.len(),
+                outcome.unscheduled_deaths.iter().next()
+            );
+        }
+        Ok(())
+    })();
+    row.wall_secs = started.elapsed().as_secs_f64();
+    if let Err(e) = r {
+        row.error = Some(format!("{e:#}"));
+    }
+    row
+}
+
+fn floor_run(n: u32, ticks: u64, interrupt: &Interrupt, run_ids: &mut Vec<String>) -> FloorRow {
+    let mut row = FloorRow {
+        agents: n,
+        ..FloorRow::default()
+    };
+    let r = (|| -> anyhow::Result<()> {
+        let run = BenchRun::claim()?;
+        run_ids.push(run.id().to_string());
+        let mut kids = Children::new();
+        let world = kids
+            .spawn(
+                "floor world",
+                &ChildSpec::FloorWorld {
+                    run_id: run.id().to_string(),
+                    robots: n as usize,
+                    ticks,
+                },
+                true,
+            )?
+            .context("floor world messages")?;
+        world.ready(Duration::from_secs(30), interrupt)?;
+        for id in 0..n {
+            interrupt.check()?;
+            kids.spawn(
+                &format!("floor robot {id}"),
+                &ChildSpec::FloorAgent {
+                    run_id: run.id().to_string(),
+                    robot: id,
+                },
+                false,
+            )?;
+        }
+        let startup = PEER_TIMEOUT + Duration::from_millis(100) * n;
+        let mut msg = world.next(startup, interrupt)?;
+        if msg == ChildMsg::Progress {
+            row.memory = Some(memory(&kids.pids()));
+            msg = world.next(PEER_TIMEOUT + Duration::from_secs(ticks), interrupt)?;
+        }
+        let ChildMsg::Result { value } = msg else {
+            anyhow::bail!("floor world: expected a result, got {msg:?}");
+        };
+        let res: FloorResult = serde_json::from_value(value)?;
+        row.ticks_per_s = res.ticks as f64 / res.secs;
+        row.result = Some(res);
+        kids.finish(PEER_TIMEOUT)?;
+        Ok(())
+    })();
+    if let Err(e) = r {
+        row.error = Some(format!("{e:#}"));
+    }
+    row
+}
+
+/// The same cores in one thread, no IPC and no records: observe, every agent's step, step.
+fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRow> {
+    let n = cfg.robots.count as usize;
+    let t = Instant::now();
+    let mut world = World::new(cfg).map_err(|e| anyhow::anyhow!("{}: {}", e.key, e.message))?;
+    let mut agents: Vec<Agent> = (0..n as u32).map(|id| Agent::new(cfg, id)).collect();
+    let setup_secs = t.elapsed().as_secs_f64();
+    let mut obs = vec![Observation::empty(0, 0); n];
+    let mut commands = Vec::with_capacity(n);
+    let (mut observe, mut think, mut step) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
+    let start = Instant::now();
+    let mut ticks = 0u64;
+    while ticks < cfg.scenario.ticks && start.elapsed() < IN_PROCESS_BUDGET {
+        interrupt.check()?;
+        let t0 = Instant::now();
+        world.observe(&mut obs);
+        let t1 = Instant::now();
+        commands.clear();
+        commands.extend(agents.iter_mut().zip(&obs).map(|(a, o)| Some(a.step(o))));
+        let t2 = Instant::now();
+        world.step(&commands);
+        world.drain_events();
+        let t3 = Instant::now();
+        observe += t1 - t0;
+        think += t2 - t1;
+        step += t3 - t2;
+        ticks += 1;
+    }
+    let secs = start.elapsed().as_secs_f64();
+    let per = |d: Duration| d.as_secs_f64() * 1e3 / ticks.max(1) as f64;
+    Ok(InProcessRow {
+        agents: n as u32,
+        ticks,
+        setup_secs,
+        secs,
+        robot_steps_per_s: (n as f64 * ticks as f64) / secs,
+        observe_ms: per(observe),
+        agents_ms: per(think),
+        step_ms: per(step),
+        radio_copies_per_tick: world.metrics().radio.sent as f64 / ticks.max(1) as f64,
+        error: None,
+    })
+}
+
+/// The text tables.
+pub fn table(r: &SwarmReport) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let m = &r.machine;
+    let _ = writeln!(
+        s,
+        "machine: {} cpus, {}, kernel {}, load {}; {} ticks per run of {}",
+        m["nproc"], m["cpu"], m["kernel"], m["loadavg_at_start"], r.ticks, r.config
+    );
+    let _ = writeln!(
+        s,
+        "\nlock-step runtime (world + N robot processes) against the floor (same IPC, empty cores)"
+    );
+    let _ = writeln!(
+        s,
+        "{:>5} | {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>5} | {:>8} {:>9} {:>9} {:>9} {:>9} | {:>6}",
+        "N",
+        "ticks/s",
+        "median",
+        "p99",
+        "startup",
+        "RSS",
+        "PSS",
+        "fds",
+        "ticks/s",
+        "median",
+        "p99",
+        "startup",
+        "PSS",
+        "x floor"
+    );
+    for (i, rt) in r.runtime.iter().enumerate() {
+        let fl = r.floor.get(i);
+        let left = match &rt.error {
+            Some(e) => format!("failed: {e}"),
+            None => {
+                let mem = rt.memory.unwrap_or_default();
+                format!(
+                    "{:>8.1} {:>9} {:>9} {:>9} {:>9} {:>9} {:>5}",
+                    rt.ticks_per_s,
+                    ms(rt.tick_ms_median),
+                    ms(rt.tick_ms_p99),
+                    rt.startup_ms.map(ms).unwrap_or_else(|| "-".into()),
+                    fmt_bytes(mem.rss_kib as f64 * 1024.0),
+                    fmt_bytes(mem.pss_kib as f64 * 1024.0),
+                    rt.world_fds.map(|f| f.to_string()).unwrap_or_default()
+                )
+            }
+        };
+        let right = match fl {
+            Some(FloorRow {
+                result: Some(f),
+                memory,
+                ticks_per_s,
+                ..
+            }) => format!(
+                "{:>8.1} {:>9} {:>9} {:>9} {:>9}",
+                ticks_per_s,
+                ms(f.tick_ns.median / 1e6),
+                ms(f.tick_ns.p99 / 1e6),
+                ms(f.startup_ms),
+                fmt_bytes(memory.unwrap_or_default().pss_kib as f64 * 1024.0)
+            ),
+            Some(FloorRow { error: Some(e), .. }) => format!("failed: {e}"),
+            _ => "-".into(),
+        };
+        let ratio = r
+            .comparison
+            .iter()
+            .find(|c| c.agents == rt.agents)
+            .map(|c| format!("{:.2}x", c.median_ratio))
+            .unwrap_or_else(|| "-".into());
+        let _ = writeln!(s, "{:>5} | {left} | {right} | {ratio:>6}", rt.agents);
+    }
+    let _ = writeln!(s, "\nwhere a runtime tick goes (mean ms per tick)");
+    let _ = writeln!(
+        s,
+        "{:>5} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "N", "observe", "publish", "wait", "step", "record"
+    );
+    for rt in r.runtime.iter().filter(|x| x.error.is_none()) {
+        let p = &rt.phases_ms;
+        let f = |k: &str| ms(p[k].as_f64().unwrap_or(f64::NAN));
+        let _ = writeln!(
+            s,
+            "{:>5} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            rt.agents,
+            f("observe"),
+            f("publish"),
+            f("wait"),
+            f("step"),
+            f("record")
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nin-process (same cores, one thread, no IPC, no records)"
+    );
+    let _ = writeln!(
+        s,
+        "{:>6} {:>6} {:>12} {:>9} {:>9} {:>9} {:>12} {:>8}",
+        "N", "ticks", "robot-steps/s", "observe", "agents", "step", "radio/tick", "setup"
+    );
+    for p in &r.in_process {
+        if let Some(e) = &p.error {
+            let _ = writeln!(s, "{:>6} failed: {e}", p.agents);
+            continue;
+        }
+        let _ = writeln!(
+            s,
+            "{:>6} {:>6} {:>12} {:>9} {:>9} {:>9} {:>12} {:>8}",
+            p.agents,
+            p.ticks,
+            fmt_rate(p.robot_steps_per_s),
+            ms(p.observe_ms),
+            ms(p.agents_ms),
+            ms(p.step_ms),
+            fmt_rate(p.radio_copies_per_tick),
+            format!("{:.2} s", p.setup_secs)
+        );
+    }
+    s
+}
+
+fn ms(v: f64) -> String {
+    if !v.is_finite() {
+        "-".into()
+    } else if v < 1.0 {
+        format!("{:.0} us", v * 1e3)
+    } else if v < 1000.0 {
+        format!("{v:.2} ms")
+    } else {
+        format!("{:.2} s", v / 1e3)
+    }
+}
+
+fn plots(r: &SwarmReport, dir: &Path) -> anyhow::Result<()> {
+    let ok_rt: Vec<&RuntimeRow> = r.runtime.iter().filter(|x| x.error.is_none()).collect();
+    let ok_fl: Vec<(&FloorRow, &FloorResult)> = r
+        .floor
+        .iter()
+        .filter_map(|f| f.result.as_ref().map(|x| (f, x)))
+        .collect();
+    let series = |name: &str, colour, dashed, points: Vec<(f64, f64)>| Series {
+        name: name.into(),
+        points,
+        colour,
+        dashed,
+    };
+    let panels = vec![
+        Panel {
+            title: "lock-step ticks per second".into(),
+            x_desc: "robot processes N".into(),
+            y_desc: "ticks/s".into(),
+            series: vec![
+                series(
+                    "runtime",
+                    0,
+                    false,
+                    ok_rt
+                        .iter()
+                        .map(|x| (x.agents as f64, x.ticks_per_s))
+                        .collect(),
+                ),
+                series(
+                    "floor",
+                    1,
+                    false,
+                    ok_fl
+                        .iter()
+                        .map(|(f, _)| (f.agents as f64, f.ticks_per_s))
+                        .collect(),
+                ),
+            ],
+        },
+        Panel {
+            title: "tick latency".into(),
+            x_desc: "robot processes N".into(),
+            y_desc: "ms".into(),
+            series: vec![
+                series(
+                    "runtime median",
+                    0,
+                    false,
+                    ok_rt
+                        .iter()
+                        .map(|x| (x.agents as f64, x.tick_ms_median))
+                        .collect(),
+                ),
+                series(
+                    "runtime p99",
+                    0,
+                    true,
+                    ok_rt
+                        .iter()
+                        .map(|x| (x.agents as f64, x.tick_ms_p99))
+                        .collect(),
+                ),
+                series(
+                    "floor median",
+                    1,
+                    false,
+                    ok_fl
+                        .iter()
+                        .map(|(f, x)| (f.agents as f64, x.tick_ns.median / 1e6))
+                        .collect(),
+                ),
+                series(
+                    "floor p99",
+                    1,
+                    true,
+                    ok_fl
+                        .iter()
+                        .map(|(f, x)| (f.agents as f64, x.tick_ns.p99 / 1e6))
+                        .collect(),
+                ),
+            ],
+        },
+        Panel {
+            title: "start-up until every robot is ready".into(),
+            x_desc: "robot processes N".into(),
+            y_desc: "ms".into(),
+            series: vec![
+                series(
+                    "runtime",
+                    0,
+                    false,
+                    ok_rt
+                        .iter()
+                        .filter_map(|x| x.startup_ms.map(|s| (x.agents as f64, s)))
+                        .collect(),
+                ),
+                series(
+                    "floor",
+                    1,
+                    false,
+                    ok_fl
+                        .iter()
+                        .map(|(f, x)| (f.agents as f64, x.startup_ms))
+                        .collect(),
+                ),
+            ],
+        },
+        Panel {
+            title: "memory of all processes".into(),
+            x_desc: "robot processes N".into(),
+            y_desc: "MiB".into(),
+            series: vec![
+                series(
+                    "runtime RSS",
+                    0,
+                    true,
+                    ok_rt
+                        .iter()
+                        .filter_map(|x| {
+                            x.memory
+                                .map(|m| (x.agents as f64, m.rss_kib as f64 / 1024.0))
+                        })
+                        .collect(),
+                ),
+                series(
+                    "runtime PSS",
+                    0,
+                    false,
+                    ok_rt
+                        .iter()
+                        .filter_map(|x| {
+                            x.memory
+                                .map(|m| (x.agents as f64, m.pss_kib as f64 / 1024.0))
+                        })
+                        .collect(),
+                ),
+                series(
+                    "floor PSS",
+                    1,
+                    false,
+                    ok_fl
+                        .iter()
+                        .filter_map(|(f, _)| {
+                            f.memory
+                                .map(|m| (f.agents as f64, m.pss_kib as f64 / 1024.0))
+                        })
+                        .collect(),
+                ),
+            ],
+        },
+    ];
+    let title = format!(
+        "swarm bench swarm: {} cpus, {}",
+        r.machine["nproc"],
+        r.machine["cpu"].as_str().unwrap_or("")
+    );
+    write_figure(dir, "swarm", &title, &panels)
+}

@@ -1,0 +1,167 @@
+//! `[faults]`: a schedule of faults the world applies at tick boundaries, so a faulted run
+//! still replays from its seed. The orchestrator performs the real signal for process faults.
+
+use serde::{Deserialize, Serialize};
+
+/// The fault schedule.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaultsConfig {
+    /// SIGKILL a robot's process; it counts as dead from exactly that tick.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub kill: Vec<KillFault>,
+    /// Split the radio: robots in different groups cannot hear each other from `from` to `to`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub partition: Vec<PartitionFault>,
+    /// All radio off from `from` to `to`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub blackout: Vec<Window>,
+}
+
+/// `[[faults.kill]]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KillFault {
+    /// Tick at which the robot is dead.
+    pub tick: u64,
+    /// A robot id, or `"leader"`: the robot that last reported itself leader.
+    pub robot: FaultTarget,
+}
+
+/// Which robot a process fault hits.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum FaultTarget {
+    /// This robot.
+    Id(u32),
+    /// A named target; only `"leader"` is valid.
+    Named(String),
+}
+
+/// `[[faults.partition]]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartitionFault {
+    /// First tick of the partition.
+    pub from: u64,
+    /// First tick after it.
+    pub to: u64,
+    /// Disjoint groups of robot ids; robots listed nowhere form one more group.
+    pub groups: Vec<Vec<u32>>,
+}
+
+/// A span of ticks, `from` included, `to` excluded.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Window {
+    /// First tick.
+    pub from: u64,
+    /// First tick after.
+    pub to: u64,
+}
+
+impl FaultsConfig {
+    /// Checks ids against `robots` and windows for order; `Err((key, expected))`.
+    pub fn validate(&self, robots: u32) -> Result<(), (String, String)> {
+        for (i, k) in self.kill.iter().enumerate() {
+            match &k.robot {
+                FaultTarget::Id(id) if *id >= robots => {
+                    return Err((
+                        format!("faults.kill[{i}].robot"),
+                        format!("expected a robot id in [0, {}], got {id}", robots - 1),
+                    ));
+                }
+                FaultTarget::Named(name) if name != "leader" => {
+                    return Err((
+                        format!("faults.kill[{i}].robot"),
+                        format!("expected a robot id or \"leader\", got \"{name}\""),
+                    ));
+                }
+                _ => {}
+            }
+        }
+        for (i, p) in self.partition.iter().enumerate() {
+            window(&format!("faults.partition[{i}]"), p.from, p.to)?;
+            let mut seen = std::collections::BTreeSet::new();
+            for id in p.groups.iter().flatten() {
+                if *id >= robots || !seen.insert(*id) {
+                    return Err((
+                        format!("faults.partition[{i}].groups"),
+                        format!(
+                            "expected disjoint groups of robot ids in [0, {}], got {id} twice or out of range",
+                            robots - 1
+                        ),
+                    ));
+                }
+            }
+        }
+        for (i, b) in self.blackout.iter().enumerate() {
+            window(&format!("faults.blackout[{i}]"), b.from, b.to)?;
+        }
+        Ok(())
+    }
+
+    /// Per robot, a radio group label at `tick`: robots with different labels cannot hear
+    /// each other. `None` when no radio fault is active.
+    pub fn radio_groups(&self, tick: u64, robots: usize) -> Option<Vec<u64>> {
+        let active = |from: u64, to: u64| from <= tick && tick < to;
+        let mut labels: Option<Vec<u64>> = None;
+        if self.blackout.iter().any(|b| active(b.from, b.to)) {
+            return Some((0..robots as u64).collect());
+        }
+        for p in self.partition.iter().filter(|p| active(p.from, p.to)) {
+            let l = labels.get_or_insert_with(|| vec![0; robots]);
+            let rest = p.groups.len() as u64;
+            for (r, label) in l.iter_mut().enumerate() {
+                let g = p
+                    .groups
+                    .iter()
+                    .position(|g| g.contains(&(r as u32)))
+                    .map_or(rest, |g| g as u64);
+                // Combine with earlier partitions: different in any means apart.
+                *label = label.wrapping_mul(1_000_003).wrapping_add(g + 1);
+            }
+        }
+        labels
+    }
+}
+
+fn window(key: &str, from: u64, to: u64) -> Result<(), (String, String)> {
+    if from < to {
+        Ok(())
+    } else {
+        Err((
+            format!("{key}.to"),
+            format!("expected a tick after from = {from}, got {to}"),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn groups_split_blackout_isolates_and_nothing_is_none() {
+        let f = FaultsConfig {
+            partition: vec![PartitionFault {
+                from: 10,
+                to: 20,
+                groups: vec![vec![0, 1], vec![2]],
+            }],
+            blackout: vec![Window { from: 30, to: 31 }],
+            ..FaultsConfig::default()
+        };
+        assert_eq!(f.radio_groups(5, 4), None);
+        let g = f.radio_groups(10, 4).unwrap();
+        assert_eq!(g[0], g[1]);
+        assert_ne!(g[0], g[2]);
+        assert_ne!(g[2], g[3]);
+        assert_ne!(g[0], g[3]);
+        assert_eq!(f.radio_groups(20, 4), None);
+        let b = f.radio_groups(30, 3).unwrap();
+        assert!(b[0] != b[1] && b[1] != b[2] && b[0] != b[2]);
+        assert!(f.validate(4).is_ok());
+        assert_eq!(f.validate(2).unwrap_err().0, "faults.partition[0].groups");
+    }
+}

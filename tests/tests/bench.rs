@@ -1,0 +1,225 @@
+//! `swarm bench`: the commands run, their JSON holds what the issue asks for, the loss
+//! accounting shows the runtime's settings losing nothing, and nothing is left behind. No
+//! assertion here is about speed.
+
+use std::time::Duration;
+use swarmrt_tests::{assert_ok, leftovers, swarm};
+
+const LIMIT: Duration = Duration::from_secs(300);
+
+fn json_of(out: &std::process::Output) -> serde_json::Value {
+    assert_ok(out);
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "stdout is not JSON ({e}):\n{}",
+            String::from_utf8_lossy(&out.stdout)
+        )
+    })
+}
+
+/// Live processes whose command line mentions any of `ids` (bench children carry their run
+/// id in `--spec` or `--run-id`).
+fn processes_of(ids: &[String]) -> Vec<String> {
+    let mut found = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        let Ok(pid) = name.parse::<i32>() else {
+            continue;
+        };
+        if !swarmrt_tests::alive(pid) {
+            continue;
+        }
+        let cmd = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+        let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
+        if ids.iter().any(|id| cmd.contains(id.as_str())) {
+            found.push(cmd);
+        }
+    }
+    found
+}
+
+fn assert_nothing_left(v: &serde_json::Value) {
+    let ids: Vec<String> = v["run_ids"]
+        .as_array()
+        .expect("run_ids")
+        .iter()
+        .map(|x| x.as_str().unwrap().to_string())
+        .collect();
+    assert!(!ids.is_empty(), "the report names its run ids");
+    for id in &ids {
+        assert!(leftovers(id).is_empty(), "{id}: {:?}", leftovers(id));
+    }
+    let left = processes_of(&ids);
+    assert!(left.is_empty(), "processes left running: {left:?}");
+}
+
+fn positive(v: &serde_json::Value, what: &str) {
+    let x = v
+        .as_f64()
+        .unwrap_or_else(|| panic!("{what} is not a number: {v}"));
+    assert!(x > 0.0, "{what} = {x}");
+}
+
+#[test]
+fn bench_ipc_reports_every_transport_and_the_runtime_loses_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out_dir = tmp.path().join("ipc");
+    let out = swarm(
+        &[
+            "bench",
+            "ipc",
+            "--secs",
+            "0.2",
+            "--payload",
+            "64",
+            "--fanout",
+            "1,3",
+            "--json",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ],
+        LIMIT,
+    );
+    let v = json_of(&out);
+
+    let transports = [
+        "iox2-poll",
+        "iox2-listener",
+        "iox2-waitset",
+        "unix-socket",
+        "tcp-loopback",
+        "crossbeam-inproc",
+    ];
+    let rows = v["rows"].as_array().expect("rows");
+    for t in transports {
+        let row = rows
+            .iter()
+            .find(|r| r["transport"] == t && r["payload"] == 64)
+            .unwrap_or_else(|| panic!("no row for {t}: {v}"));
+        assert!(row["error"].is_null(), "{t}: {}", row["error"]);
+        positive(&row["rtt_ns"]["median"], &format!("{t} rtt median"));
+        positive(&row["rtt_ns"]["p99"], &format!("{t} rtt p99"));
+        positive(&row["rtt_ns"]["p999"], &format!("{t} rtt p99.9"));
+        positive(&row["msgs_per_s"], &format!("{t} msgs/s"));
+        positive(&row["bytes_per_s"], &format!("{t} bytes/s"));
+        positive(&row["rtt_vs_baseline"], &format!("{t} ratio"));
+        assert_eq!(row["sent"], row["received"], "{t} is lossless: {row}");
+    }
+
+    let fanout = v["fanout"].as_array().expect("fanout");
+    for k in [1, 3] {
+        let f = fanout
+            .iter()
+            .find(|f| f["subscribers"] == k)
+            .unwrap_or_else(|| panic!("no fan-out row for {k}"));
+        assert!(f["error"].is_null(), "fan-out {k}: {}", f["error"]);
+        positive(
+            &f["result"]["last_receive_ns"]["median"],
+            "fan-out last receive",
+        );
+        positive(&f["result"]["all_acked_ns"]["p99"], "fan-out all acked p99");
+    }
+
+    let loss = v["loss"].as_array().expect("loss");
+    let row = |id: &str| {
+        loss.iter()
+            .find(|l| l["id"] == id)
+            .unwrap_or_else(|| panic!("no loss row {id}: {v}"))
+    };
+    let defaults = row("iceoryx2-defaults");
+    assert!(defaults["error"].is_null(), "{defaults}");
+    assert!(defaults["sent"].as_u64().unwrap() > 0);
+    let d = defaults["dropped"].as_u64().expect("dropped is a count");
+    assert_eq!(
+        d + defaults["received"].as_u64().unwrap(),
+        defaults["sent"].as_u64().unwrap(),
+        "{defaults}"
+    );
+    let lock_step = row("runtime-lock-step");
+    assert!(lock_step["error"].is_null(), "{lock_step}");
+    assert!(lock_step["sent"].as_u64().unwrap() > 0);
+    assert_eq!(
+        lock_step["dropped"], 0,
+        "the runtime's settings drop nothing: {lock_step}"
+    );
+    assert_eq!(lock_step["received"], lock_step["sent"]);
+    assert_eq!(lock_step["gaps"], 0);
+
+    assert!(v["path"]["error"].is_null(), "{}", v["path"]);
+    positive(&v["path"]["runtime_rtt_ns"]["median"], "runtime path");
+    positive(&v["path"]["raw_rtt_ns"]["median"], "raw path");
+
+    for f in ["results.json", "ipc.svg", "ipc.png"] {
+        assert!(out_dir.join(f).exists(), "{f} written");
+    }
+    assert_nothing_left(&v);
+}
+
+#[test]
+fn bench_swarm_reports_runtime_floor_and_in_process_and_cleans_up() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out_dir = tmp.path().join("swarm");
+    let out = swarm(
+        &[
+            "bench",
+            "swarm",
+            "--agents",
+            "3",
+            "--ticks",
+            "50",
+            "--in-process-agents",
+            "20",
+            "--json",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ],
+        LIMIT,
+    );
+    let v = json_of(&out);
+    let rt = &v["runtime"][0];
+    assert!(rt["error"].is_null(), "{rt}");
+    assert_eq!(rt["agents"], 3);
+    assert_eq!(rt["ticks"], 50);
+    positive(&rt["ticks_per_s"], "runtime ticks/s");
+    positive(&rt["tick_ms_median"], "runtime median");
+    positive(&rt["startup_ms"], "runtime startup");
+    positive(&rt["memory"]["pss_kib"], "runtime PSS");
+    assert_eq!(rt["memory"]["processes"], 4, "world + 3 robots: {rt}");
+    positive(&rt["world_fds"], "world fds");
+
+    let fl = &v["floor"][0];
+    assert!(fl["error"].is_null(), "{fl}");
+    assert_eq!(fl["result"]["ticks"], 50);
+    positive(&fl["result"]["tick_ns"]["median"], "floor median");
+    positive(&fl["memory"]["pss_kib"], "floor PSS");
+    positive(&v["comparison"][0]["median_ratio"], "runtime / floor");
+
+    let ip = &v["in_process"][0];
+    assert!(ip["error"].is_null(), "{ip}");
+    assert_eq!(ip["agents"], 20);
+    positive(&ip["robot_steps_per_s"], "in-process robot-steps/s");
+
+    for f in [
+        "results.json",
+        "swarm.svg",
+        "swarm.png",
+        "runs/n3/trajectory.csv",
+    ] {
+        assert!(out_dir.join(f).exists(), "{f} written");
+    }
+    assert_nothing_left(&v);
+}
+
+#[test]
+fn bench_refuses_bad_arguments_with_one_line() {
+    for args in [
+        &["bench", "ipc", "--payload", "8"][..],
+        &["bench", "ipc", "--secs", "0"][..],
+        &["bench", "swarm", "--agents", "0"][..],
+    ] {
+        let out = swarm(args, Duration::from_secs(60));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+    }
+}

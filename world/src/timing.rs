@@ -1,0 +1,168 @@
+//! Wall-clock cost of the lock-step ticks, for `metrics.json` (`shell.timing`) and
+//! `swarm bench swarm`. Never part of the replayable records.
+//!
+//! Tick durations go into a log-bucketed histogram (1 % wide buckets), so memory stays
+//! constant however long a run is, and percentiles are exact to within 1 %.
+
+use serde::Serialize;
+
+/// Bucket width: each bucket spans a factor of this.
+const GROWTH: f64 = 1.01;
+/// Buckets cover 1 ns .. ~10 s.
+const BUCKETS: usize = 2400;
+
+/// Where the time of one tick went, in nanoseconds.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TickPhases {
+    /// `World::observe`.
+    pub observe: u64,
+    /// Loan, copy, send and notify the observation sample.
+    pub publish: u64,
+    /// From the notify until every live robot's command was drained.
+    pub wait: u64,
+    /// `World::step` and draining its events.
+    pub step: u64,
+    /// Writing the tick's records.
+    pub record: u64,
+}
+
+impl TickPhases {
+    /// The whole tick.
+    pub fn total(&self) -> u64 {
+        self.observe + self.publish + self.wait + self.step + self.record
+    }
+}
+
+/// Accumulates [`TickPhases`].
+#[derive(Debug, Clone)]
+pub struct TickTimer {
+    hist: Vec<u64>,
+    ticks: u64,
+    sums: [u128; 5],
+    max: u64,
+}
+
+impl Default for TickTimer {
+    fn default() -> Self {
+        TickTimer {
+            hist: vec![0; BUCKETS],
+            ticks: 0,
+            sums: [0; 5],
+            max: 0,
+        }
+    }
+}
+
+fn bucket(ns: u64) -> usize {
+    if ns <= 1 {
+        return 0;
+    }
+    ((ns as f64).ln() / GROWTH.ln()) as usize
+}
+
+/// Upper edge of bucket `b` in ns.
+fn upper(b: usize) -> f64 {
+    GROWTH.powi(b as i32 + 1)
+}
+
+/// Summary of the ticks timed so far (milliseconds).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct TickTiming {
+    /// Ticks timed.
+    pub ticks: u64,
+    /// Sum of the tick durations, seconds (ticks / this = ticks per second while ticking).
+    pub seconds: f64,
+    /// Median tick, ms (to within 1 %).
+    pub tick_ms_median: f64,
+    /// 99th percentile tick, ms (to within 1 %).
+    pub tick_ms_p99: f64,
+    /// Longest tick, ms.
+    pub tick_ms_max: f64,
+    /// Mean ms per tick in `World::observe`.
+    pub observe_ms_mean: f64,
+    /// Mean ms per tick publishing the observations.
+    pub publish_ms_mean: f64,
+    /// Mean ms per tick waiting for the robots' commands.
+    pub wait_ms_mean: f64,
+    /// Mean ms per tick in `World::step`.
+    pub step_ms_mean: f64,
+    /// Mean ms per tick writing records.
+    pub record_ms_mean: f64,
+}
+
+impl TickTimer {
+    /// Adds one tick.
+    pub fn add(&mut self, p: TickPhases) {
+        let total = p.total();
+        let b = bucket(total).min(BUCKETS - 1);
+        self.hist[b] += 1;
+        self.ticks += 1;
+        self.max = self.max.max(total);
+        for (s, v) in self
+            .sums
+            .iter_mut()
+            .zip([p.observe, p.publish, p.wait, p.step, p.record])
+        {
+            *s += v as u128;
+        }
+    }
+
+    /// The tick-duration percentile `q` in ns (bucket upper edge, capped at the maximum).
+    pub fn percentile_ns(&self, q: f64) -> f64 {
+        if self.ticks == 0 {
+            return 0.0;
+        }
+        let rank = ((q * self.ticks as f64).ceil() as u64).clamp(1, self.ticks);
+        let mut seen = 0;
+        for (b, &c) in self.hist.iter().enumerate() {
+            seen += c;
+            if seen >= rank {
+                return upper(b).min(self.max as f64);
+            }
+        }
+        self.max as f64
+    }
+
+    /// The summary.
+    pub fn summary(&self) -> TickTiming {
+        let n = self.ticks.max(1) as f64;
+        let mean_ms = |i: usize| self.sums[i] as f64 / n / 1e6;
+        let total: u128 = self.sums.iter().sum();
+        TickTiming {
+            ticks: self.ticks,
+            seconds: total as f64 / 1e9,
+            tick_ms_median: self.percentile_ns(0.5) / 1e6,
+            tick_ms_p99: self.percentile_ns(0.99) / 1e6,
+            tick_ms_max: self.max as f64 / 1e6,
+            observe_ms_mean: mean_ms(0),
+            publish_ms_mean: mean_ms(1),
+            wait_ms_mean: mean_ms(2),
+            step_ms_mean: mean_ms(3),
+            record_ms_mean: mean_ms(4),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentiles_within_one_percent() {
+        let mut t = TickTimer::default();
+        for ms in 1..=1000u64 {
+            t.add(TickPhases {
+                wait: ms * 1_000_000,
+                ..TickPhases::default()
+            });
+        }
+        let s = t.summary();
+        assert_eq!(s.ticks, 1000);
+        assert!((s.tick_ms_median - 500.0).abs() <= 5.0, "{s:?}");
+        assert!((s.tick_ms_p99 - 990.0).abs() <= 10.0, "{s:?}");
+        assert_eq!(s.tick_ms_max, 1000.0);
+        assert!((s.wait_ms_mean - 500.5).abs() < 1e-9);
+        assert!((s.seconds - 500.5).abs() < 1e-6);
+        assert_eq!(TickTimer::default().summary().tick_ms_median, 0.0);
+    }
+}
