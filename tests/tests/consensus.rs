@@ -148,6 +148,46 @@ fn killing_the_leaders_process_gets_a_new_leader_and_the_checker_stays_clean() {
 }
 
 #[test]
+fn a_scheduled_kill_of_the_leader_replays_and_the_swarm_still_switches_goal() {
+    // The world's "leader" kill target is the robot that last claimed leadership in a note.
+    let tmp = tempfile::tempdir().unwrap();
+    let args = [
+        "--ticks",
+        "500",
+        "--set",
+        "faults.kill=[{tick=200,robot=\"leader\"}]",
+    ];
+    let p = run(tmp.path(), "p", "configs/raft_election.toml", &args);
+    let mut ip_args = args.to_vec();
+    ip_args.push("--in-process");
+    let ip = run(tmp.path(), "ip", "configs/raft_election.toml", &ip_args);
+    assert!(bytes(&p, "events.jsonl") == bytes(&ip, "events.jsonl"));
+    let m = metrics(&p);
+    assert_eq!(m["reproducible"], true, "a scheduled kill replays");
+    let c = &m["consensus"];
+    assert_eq!(c["safety_violations"], 0, "{c}");
+    // The victim was the leader of that moment; a new one took over.
+    let leader_before = notes(&p)
+        .iter()
+        .filter(|(t, _, n)| *t < 200 && n["state"]["role"] == "leader")
+        .map(|(_, r, _)| *r)
+        .next_back()
+        .expect("a leader before the kill");
+    let died: Vec<Value> = String::from_utf8(bytes(&p, "events.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).unwrap())
+        .filter(|v| v["event"] == "died")
+        .collect();
+    assert_eq!(died.len(), 1);
+    assert_eq!(died[0]["robot"], leader_before);
+    assert_eq!(c["reelection_ticks"].as_array().unwrap().len(), 1, "{c}");
+    assert_ne!(c["leader"]["robot"], leader_before, "{c}");
+    // The decision scheduled after the kill is applied by every live robot.
+    assert_eq!(c["decisions"][0]["applied_by"], 8, "{c}");
+}
+
+#[test]
 fn quadrant_leader_scenario_ends_with_one_agreed_leader() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = run(

@@ -16,8 +16,7 @@ pub mod log;
 pub mod quadrant;
 pub mod raft;
 
-use rand::{Rng as _, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand::Rng as _;
 use swarmrt_protocol::config::Config;
 use swarmrt_protocol::consensus::{
     Algorithm, ConsensusConfig, ConsensusNote, Decision, Item, SentCounts,
@@ -28,33 +27,8 @@ use crate::agent::Decoded;
 use quadrant::Quadrant;
 use raft::{Persistent, Raft, RaftParams};
 
-/// The random generator of the cores.
-pub type Rng = ChaCha8Rng;
-
-/// A seeded stream for (`seed`, `purpose`, `id`), derived exactly as the world's
-/// `rng::stream` is (FNV-1a of the purpose, SplitMix64 mixing), so every draw in a run
-/// follows from the run seed.
-pub fn stream(seed: u64, purpose: &str, id: u64) -> Rng {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in purpose.bytes() {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    let a = splitmix(seed ^ splitmix(h));
-    let b = splitmix(a ^ id.wrapping_mul(0x9e37_79b9_7f4a_7c15));
-    let mut key = [0u8; 32];
-    for (i, chunk) in key.chunks_mut(8).enumerate() {
-        chunk.copy_from_slice(&splitmix(b.wrapping_add(i as u64)).to_le_bytes());
-    }
-    ChaCha8Rng::from_seed(key)
-}
-
-fn splitmix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
+/// Every random draw of the cores comes from the run's shared seeded streams.
+pub use swarmrt_protocol::rng::{Rng, stream};
 
 /// Report bytes kept free for the behaviour's own notes.
 pub const BEHAVIOUR_NOTE_RESERVE: usize = 32;
