@@ -274,16 +274,7 @@ pub fn run(case: &Case, record: bool) -> Outcome {
                 }
             }
         }
-        let faults = &case.faults;
-        let mut blocked = |a: usize, b: usize| {
-            faults.iter().any(|f| match f {
-                Fault::Partition { from, to, side } => {
-                    (*from..*to).contains(&t) && side[a] != side[b]
-                }
-                Fault::Crash { .. } => false,
-            })
-        };
-        sim.step(&mut blocked);
+        sim.step(groups(&case.faults, t, n));
         if !sim.checker().violations().is_empty() {
             break;
         }
@@ -326,6 +317,24 @@ pub fn run(case: &Case, record: bool) -> Outcome {
         events: record.then(|| sim.recorded()),
         budget: sim.budget_counters(),
     }
+}
+
+/// Radio groups at tick `t`: one bit per active partition, so two robots are apart when any
+/// active partition puts them on different sides.
+fn groups(faults: &[Fault], t: u64, n: usize) -> Option<Vec<u64>> {
+    let mut g = vec![0u64; n];
+    let mut any = false;
+    for (bit, f) in faults.iter().enumerate() {
+        if let Fault::Partition { from, to, side } = f
+            && (*from..*to).contains(&t)
+        {
+            any = true;
+            for (r, s) in side.iter().enumerate() {
+                g[r] |= (*s as u64) << bit;
+            }
+        }
+    }
+    any.then_some(g)
 }
 
 /// Whether `raft` has applied scheduled decision `id`.

@@ -34,21 +34,20 @@ pub fn measure(n: u32, loss: f64, seed: u64, leader_wait: u64) -> ElectionRun {
     cfg.radio.delay_ticks = 2;
     cfg.radio.capacity = 4;
     let mut sim = Sim::new(&cfg, grid(n as usize, 0.7));
-    let mut open = |_: usize, _: usize| false;
     while sim.checker().first_leader_tick().is_none() && sim.tick() < GIVE_UP {
-        sim.step(&mut open);
+        sim.step(None);
     }
     let first_leader = sim.checker().first_leader_tick();
     let mut reelection = None;
     if first_leader.is_some() {
         for _ in 0..leader_wait {
-            sim.step(&mut open);
+            sim.step(None);
         }
         if let Some(l) = sim.leader() {
             sim.crash(l);
             let until = sim.tick() + GIVE_UP;
             while sim.checker().reelection_ticks().is_empty() && sim.tick() < until {
-                sim.step(&mut open);
+                sim.step(None);
             }
             reelection = sim.checker().reelection_ticks().first().copied();
         }

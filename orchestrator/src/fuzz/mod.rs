@@ -3,11 +3,12 @@
 //! [`Sim`] drives real [`Agent`]s (behaviour + consensus, exactly as in a run) through the
 //! world's real [`RadioMedium`], so messages see the same range, loss, delay, jitter and
 //! capacity rules as in `swarm run`. Robots stand still at fixed positions (movement does not
-//! matter to consensus), and the harness models what the world does not offer as an API:
-//! partitions (through the medium's line-of-sight callback, so partitioned copies count as
-//! `dropped_line_of_sight`), crashes (the robot stops talking, its notes stop, the checker
-//! hears of its death) and restarts with the persistent Raft state the robot had (term, vote,
-//! log, commit: Raft's stable storage; volatile state and the behaviour start afresh).
+//! matter to consensus). Partitions are the medium's own radio groups (as a `[faults]`
+//! partition in a run: copies count as `dropped_partition`); the harness adds what a run's
+//! world does not offer: crashes at any tick (the robot stops talking, its notes stop, the
+//! checker hears of its death) and restarts with the persistent Raft state the robot had
+//! (term, vote, log, commit: Raft's stable storage; volatile state and the behaviour start
+//! afresh).
 
 pub mod consensus;
 pub mod election;
@@ -83,8 +84,8 @@ impl Sim {
         let n = cfg.robots.count as usize;
         assert_eq!(positions.len(), n, "one position per robot");
         let mut radio = cfg.radio;
-        // Partitions are modelled through the line-of-sight callback.
-        radio.line_of_sight = true;
+        // No obstacles here: nothing blocks a line of sight.
+        radio.line_of_sight = false;
         Sim {
             agents: (0..n as u32).map(|i| Some(Agent::new(cfg, i))).collect(),
             saved: vec![None; n],
@@ -187,8 +188,9 @@ impl Sim {
     }
 
     /// One tick: every live robot observes and acts, its notes go to the checker, the medium
-    /// routes its frames (`blocked(a, b)`: a partition between a and b) and delivers.
-    pub fn step(&mut self, blocked: &mut dyn FnMut(usize, usize) -> bool) {
+    /// routes its frames (robots in different `groups` cannot hear each other; `None`: no
+    /// partition) and delivers.
+    pub fn step(&mut self, groups: Option<Vec<u64>>) {
         let n = self.agents.len();
         let tick = self.tick;
         let mut outboxes: Vec<Vec<Frame>> = vec![Vec::new(); n];
@@ -227,8 +229,9 @@ impl Sim {
         }
         let can_talk: Vec<bool> = self.agents.iter().map(Option::is_some).collect();
         let slices: Vec<&[Frame]> = outboxes.iter().map(|o| o.as_slice()).collect();
+        self.medium.set_groups(groups);
         self.medium
-            .send(tick, &slices, &self.positions, &can_talk, blocked);
+            .send(tick, &slices, &self.positions, &can_talk, &mut |_, _| false);
         self.checker.end_tick(tick);
         self.tick += 1;
         self.medium.deliver(self.tick, &can_talk, &mut self.inboxes);
@@ -254,4 +257,38 @@ fn counts(a: &Agent) -> (u64, u64) {
     a.consensus()
         .and_then(|c| c.raft())
         .map_or((0, 0), |r| (r.left_for_notes(), r.unsent()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_partition_keeps_the_minority_from_leading_and_a_crash_silences_a_robot() {
+        let mut cfg = base_config();
+        cfg.robots.count = 5;
+        let mut sim = Sim::new(&cfg, grid(5, 0.7));
+        // Robots 0 and 1 are cut off from 2, 3 and 4 for the whole run.
+        let apart = || Some(vec![1, 1, 0, 0, 0]);
+        while sim.checker().current_leader().is_none() {
+            assert!(sim.tick() < 1000, "a leader in the majority");
+            sim.step(apart());
+        }
+        let (leader, _) = sim.checker().current_leader().unwrap();
+        assert!(leader >= 2, "leader {leader} is in the majority");
+        assert!(sim.radio().dropped_partition > 0);
+        sim.crash(leader);
+        assert!(!sim.alive(leader));
+        let before = sim.radio().frames;
+        let t = sim.tick();
+        while sim.tick() < t + 300 {
+            sim.step(apart());
+        }
+        // Two live robots on the majority side and two in the minority: no side has the
+        // three votes of a majority of five, so nobody leads.
+        assert_eq!(sim.leader(), None);
+        assert_eq!(sim.checker().current_leader(), None);
+        assert!(sim.radio().frames > before, "the others still talk");
+        assert!(sim.checker().violations().is_empty());
+    }
 }

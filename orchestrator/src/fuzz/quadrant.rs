@@ -94,9 +94,8 @@ pub fn trial(n: u32, loss: f64, area_per_robot: f64, seed: u64) -> Trial {
     let unique_top = scores.iter().filter(|&&s| s == top).count() == 1;
     let mut sim = Sim::new(&cfg, pos);
     sim.set_senses(headings, sees);
-    let mut open = |_: usize, _: usize| false;
     while sim.tick() < quadrant.decide_tick + 30 {
-        sim.step(&mut open);
+        sim.step(None);
     }
     let beliefs: Vec<Option<u32>> = (0..n)
         .map(|r| {
