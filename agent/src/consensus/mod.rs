@@ -11,6 +11,28 @@
 //! so the robot that is leader at the proposal's tick, or the first one after it, proposes
 //! it; a decision already in the leader's log (put there by an earlier leader) is not
 //! proposed again.
+//!
+//! The Raft core alone, for a group of one (which elects itself):
+//!
+//! ```
+//! use swarmrt_agent::consensus::raft::{Proposed, Raft, RaftParams};
+//! use swarmrt_agent::consensus::{NOTE_BUDGET, Notes, stream};
+//! use swarmrt_protocol::consensus::{ConsensusNote, Decision, Role};
+//!
+//! let p = RaftParams { n: 1, election_min: 5, election_max: 10, heartbeat: 2,
+//!                      pre_vote: true, check_quorum: true };
+//! let mut raft = Raft::new(0, p, stream(42, "raft", 0));
+//! let mut notes = Notes::new(NOTE_BUDGET);
+//! while raft.role() != Role::Leader {
+//!     raft.tick(&mut notes); // time enters as ticks; messages would enter through step()
+//! }
+//! let d = Decision::SetGoal { x: 3.0, y: 4.0 };
+//! assert_eq!(raft.propose(0, d, &mut notes), Proposed::Appended);
+//! while raft.next_apply(&mut notes).is_some() {} // the no-op, then the decision
+//! assert_eq!(raft.applied(), 2);
+//! // Every change was reported, for the run record and the checker.
+//! assert!(notes.as_slice().iter().any(|n| matches!(n, ConsensusNote::Apply { index: 2, .. })));
+//! ```
 
 pub mod log;
 pub mod quadrant;
