@@ -68,7 +68,20 @@ fn raft_election_in_processes_and_in_process_gives_the_same_safe_record() {
         .iter()
         .find(|(_, r, n)| r == proposer && n["append"]["index"] == *index)
         .unwrap();
-    for robot in 0..9u64 {
+    // The config kills the leader of tick 200; every robot still alive applies the entry.
+    let events = String::from_utf8(bytes(&p, "events.jsonl")).unwrap();
+    let killed: Vec<u64> = events
+        .lines()
+        .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+        .filter(|e| e["event"] == "fault" && e["fault"] == "kill")
+        .map(|e| e["robot"].as_u64().unwrap())
+        .collect();
+    assert_eq!(killed.len(), 1, "the scheduled leader kill happened");
+    assert!(
+        leaders.iter().any(|(t, r, _)| *r == killed[0] && *t < 200),
+        "the killed robot was the leader"
+    );
+    for robot in (0..9u64).filter(|r| !killed.contains(r)) {
         let applied = notes
             .iter()
             .find(|(_, r, n)| *r == robot && n["apply"]["index"] == *index)
@@ -80,7 +93,12 @@ fn raft_election_in_processes_and_in_process_gives_the_same_safe_record() {
     let m = metrics(&p);
     let c = &m["consensus"];
     assert_eq!(c["safety_violations"], 0, "{c}");
-    assert_eq!(c["decisions"][0]["applied_by"], 9, "{c}");
+    assert_eq!(c["decisions"][0]["applied_by"], 8, "{c}");
+    assert!(
+        c["leader_changes"].as_u64().unwrap() >= 1,
+        "re-elected: {c}"
+    );
+    assert_eq!(c["reelection_ticks"].as_array().unwrap().len(), 1, "{c}");
     assert!(c["first_leader_tick"].as_u64().unwrap() < 300, "{c}");
     assert!(c["sent"]["append"].as_u64().unwrap() > 0, "{c}");
     assert_eq!(metrics(&ip)["consensus"], *c, "same metrics in both modes");
