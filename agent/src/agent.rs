@@ -3,11 +3,13 @@
 use std::collections::BTreeMap;
 use std::collections::btree_map::Entry;
 use swarmrt_protocol::config::{BehaviourConfig, Config};
-use swarmrt_protocol::{Command, Observation, RadioMsg, RobotState};
+use swarmrt_protocol::{BROADCAST, Command, Observation, RadioMsg, RobotState};
 
 use crate::behaviours::Behaviour;
 use crate::behaviours::formation::Formation;
 use crate::behaviours::goto::Goto;
+use crate::consensus::Consensus;
+use crate::consensus::raft::Persistent;
 
 /// A radio message as the behaviour sees it: who sent it, when, and what it says.
 #[derive(Debug, Clone, PartialEq)]
@@ -40,11 +42,23 @@ pub struct Agent {
     beacons: BTreeMap<u32, BeaconInfo>,
     malformed: u64,
     inbox: Vec<Decoded>,
+    consensus: Option<Consensus>,
 }
 
 impl Agent {
     /// The agent of robot `id` for this scenario.
     pub fn new(cfg: &Config, id: u32) -> Agent {
+        Self::with_consensus(cfg, id, Consensus::new(cfg, id))
+    }
+
+    /// Robot `id` restarting after a crash: a fresh behaviour, and a consensus layer that
+    /// kept its persistent Raft state (term, vote, commit, log) and re-applies the committed
+    /// decisions. `incarnation` counts the restarts.
+    pub fn restore(cfg: &Config, id: u32, state: Persistent, incarnation: u32) -> Agent {
+        Self::with_consensus(cfg, id, Consensus::restore(cfg, id, state, incarnation))
+    }
+
+    fn with_consensus(cfg: &Config, id: u32, consensus: Option<Consensus>) -> Agent {
         let behaviour: Box<dyn Behaviour + Send> = match &cfg.behaviour {
             BehaviourConfig::Goto(g) => Box::new(Goto::new(cfg, g, id)),
             BehaviourConfig::Formation(f) => Box::new(Formation::new(cfg, f, id)),
@@ -55,7 +69,13 @@ impl Agent {
             beacons: BTreeMap::new(),
             malformed: 0,
             inbox: Vec::new(),
+            consensus,
         }
+    }
+
+    /// The consensus layer, when the scenario has `[consensus]`.
+    pub fn consensus(&self) -> Option<&Consensus> {
+        self.consensus.as_ref()
     }
 
     /// The robot id.
@@ -77,6 +97,11 @@ impl Agent {
     pub fn step(&mut self, obs: &Observation) -> Command {
         self.inbox.clear();
         for f in obs.inbox() {
+            if f.dst != BROADCAST && f.dst != self.id {
+                // Not for us (the world routes unicast only to its addressee, but answers
+                // such as a granted vote must never be taken for one's own).
+                continue;
+            }
             match RadioMsg::decode(f.bytes()) {
                 Some(msg) => {
                     if let RadioMsg::Beacon { x, y, theta } = msg {
@@ -111,9 +136,21 @@ impl Agent {
             // Knocked down or dead: nothing to decide.
             return Command::act(self.id, obs.tick);
         }
+        // Consensus first: robots act only on committed decisions, and a decision applied
+        // this tick already shapes this tick's command.
+        let decisions = match &mut self.consensus {
+            Some(c) => c.step(obs, &self.inbox),
+            None => Vec::new(),
+        };
+        for d in &decisions {
+            self.behaviour.apply(d);
+        }
         let mut cmd = self.behaviour.step(obs, &self.inbox);
         cmd.robot = self.id;
         cmd.tick = obs.tick;
+        if let Some(c) = &mut self.consensus {
+            c.finish(&mut cmd);
+        }
         cmd
     }
 }

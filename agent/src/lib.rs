@@ -28,6 +28,7 @@
 pub mod agent;
 pub mod behaviours;
 pub mod cli;
+pub mod consensus;
 pub mod shell;
 
 pub use agent::{Agent, Decoded};

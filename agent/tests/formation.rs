@@ -25,7 +25,9 @@ fn obs(middle: Option<u32>, left: Option<u32>, right: Option<u32>) -> Observers 
 
 #[test]
 fn observer_selection_follows_the_papers_cases() {
-    let cases: &[(&str, &[(u32, f64, f64)], Observers)] = &[
+    /// (name, robots as (id, x', y'), expected observers)
+    type Case<'a> = (&'a str, &'a [(u32, f64, f64)], Observers);
+    let cases: &[Case] = &[
         (
             // Fig. 5: 3 and 4 share the largest x', 3 is nearer the axis -> middle. 1 and 2
             // share the largest y', 2 is further ahead -> left. 6 has the smallest y' but only

@@ -52,6 +52,9 @@ pub struct Config {
     /// Scheduled faults.
     #[serde(default)]
     pub faults: crate::faults::FaultsConfig,
+    /// Consensus among the robots (none when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub consensus: Option<crate::consensus::ConsensusConfig>,
 }
 
 /// `[scenario]`.
@@ -770,6 +773,9 @@ impl Config {
                 )?;
             }
         }
+        if let Some(c) = &self.consensus {
+            c.validate(self)?;
+        }
 
         Ok(())
     }
@@ -882,7 +888,7 @@ fn behaviour_error(b: &toml::Value) -> Option<(String, String)> {
     Some((key, err.inner().to_string()))
 }
 
-fn check(ok: bool, key: &str, expected: &str) -> Result<(), (String, String)> {
+pub(crate) fn check(ok: bool, key: &str, expected: &str) -> Result<(), (String, String)> {
     if ok {
         Ok(())
     } else {
@@ -894,7 +900,7 @@ fn finite(key: &str, v: f64) -> Result<(), (String, String)> {
     check(v.is_finite(), key, &format!("a finite number, got {v}"))
 }
 
-fn range_f(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), (String, String)> {
+pub(crate) fn range_f(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), (String, String)> {
     check(
         v.is_finite() && v >= lo && v <= hi,
         key,
@@ -902,7 +908,7 @@ fn range_f(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), (String, String)> 
     )
 }
 
-fn range_u64(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), (String, String)> {
+pub(crate) fn range_u64(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), (String, String)> {
     check(
         v >= lo && v <= hi,
         key,

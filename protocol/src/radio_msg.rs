@@ -33,6 +33,8 @@ pub enum RadioMsg {
         /// Non-zero when that lidar saw an obstacle in the role's cone.
         obstacle: u8,
     },
+    /// Election, replicated log and leader choice (`crate::consensus`).
+    Consensus(crate::consensus::ConsensusMsg),
 }
 
 impl RadioMsg {
@@ -46,6 +48,7 @@ impl RadioMsg {
         match self {
             RadioMsg::Beacon { .. } => "beacon",
             RadioMsg::Formation { .. } => "formation",
+            RadioMsg::Consensus(m) => m.kind(),
         }
     }
 }

@@ -112,7 +112,12 @@ fn bench_ipc_reports_every_transport_and_the_runtime_loses_nothing() {
             .iter()
             .find(|f| f["subscribers"] == k)
             .unwrap_or_else(|| panic!("no fan-out row for {k}"));
-        assert!(f["error"].is_null(), "fan-out {k}: {}", f["error"]);
+        assert!(
+            f["error"].is_null(),
+            "fan-out {k}: {}\nstderr: {}",
+            f["error"],
+            String::from_utf8_lossy(&out.stderr)
+        );
         positive(
             &f["result"]["last_receive_ns"]["median"],
             "fan-out last receive",

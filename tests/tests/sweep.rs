@@ -572,6 +572,26 @@ fn bad_vary_is_a_one_line_user_error_naming_the_key() {
 }
 
 #[test]
+fn out_must_be_new_empty_or_a_sweep_directory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("not-a-sweep");
+    std::fs::create_dir_all(out.join("plots")).unwrap();
+    std::fs::write(out.join("plots/precious.png"), "mine").unwrap();
+    let result = run_sweep(&sweep_args(
+        &out,
+        &["--vary", "radio.loss=0", "--in-process"],
+    ));
+    assert_eq!(result.status.code(), Some(2), "{result:?}");
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert!(err.contains("not a sweep directory"), "{err}");
+    assert_eq!(
+        std::fs::read(out.join("plots/precious.png")).unwrap(),
+        b"mine"
+    );
+    assert!(!out.join("runs").exists());
+}
+
+#[test]
 fn sweep_rows_match_single_runs() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("sweep");

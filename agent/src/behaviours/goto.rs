@@ -6,6 +6,7 @@
 
 use std::f64::consts::PI;
 use swarmrt_protocol::config::{Config, GotoConfig, LidarConfig, nearest_grid_points};
+use swarmrt_protocol::consensus::Decision;
 use swarmrt_protocol::{BROADCAST, Command, Observation, RadioMsg};
 
 use super::Behaviour;
@@ -23,6 +24,8 @@ pub struct Goto {
     slot: (f64, f64),
     goal: (f64, f64),
     goal_radius: f64,
+    count: usize,
+    bounds: [f64; 4],
     /// The side (+1 left, -1 right) this robot committed to while going around an obstacle.
     avoid_side: Option<f64>,
 }
@@ -36,19 +39,7 @@ impl Goto {
     /// Robot `id`'s behaviour for this scenario.
     pub fn new(cfg: &Config, params: &GotoConfig, id: u32) -> Goto {
         let g = cfg.map.goal;
-        // Slots: the grid points nearest the goal centre inside the map. The robot does not
-        // know the obstacles (it only senses them), so a slot may be unreachable; it then
-        // parks as close as the lidar lets it.
-        let slots = nearest_grid_points(
-            cfg.robots.count as usize,
-            (g.x, g.y),
-            params.slot_spacing.max(2.5 * cfg.robots.radius),
-            cfg.map.bounds,
-            cfg.robots.radius,
-            |_, _| true,
-        )
-        .unwrap_or_else(|| vec![(g.x, g.y); cfg.robots.count as usize]);
-        Goto {
+        let mut goto = Goto {
             id,
             params: *params,
             lidar: cfg.robots.lidar,
@@ -56,11 +47,31 @@ impl Goto {
             dt: cfg.scenario.dt,
             max_speed: cfg.robots.max_speed,
             max_turn: cfg.robots.max_turn_rate,
-            slot: slots[id as usize],
+            slot: (g.x, g.y),
             goal: (g.x, g.y),
             goal_radius: g.radius,
+            count: cfg.robots.count as usize,
+            bounds: cfg.map.bounds,
             avoid_side: None,
-        }
+        };
+        goto.slot = goto.slot_around(goto.goal);
+        goto
+    }
+
+    /// This robot's slot around `goal`: the grid points nearest the goal centre inside the
+    /// map. The robot does not know the obstacles (it only senses them), so a slot may be
+    /// unreachable; it then parks as close as the lidar lets it.
+    fn slot_around(&self, goal: (f64, f64)) -> (f64, f64) {
+        nearest_grid_points(
+            self.count,
+            goal,
+            self.params.slot_spacing.max(2.5 * self.radius),
+            self.bounds,
+            self.radius,
+            |_, _| true,
+        )
+        .and_then(|slots| slots.get(self.id as usize).copied())
+        .unwrap_or(goal)
     }
 
     /// The point this robot is heading for.
@@ -80,6 +91,19 @@ fn wrap(a: f64) -> f64 {
 }
 
 impl Behaviour for Goto {
+    /// `SetGoal`: head for this robot's slot around the new goal (same radius);
+    /// `SetSpeed`: cruise at the new speed.
+    fn apply(&mut self, decision: &Decision) {
+        match *decision {
+            Decision::SetGoal { x, y } => {
+                self.goal = (x, y);
+                self.slot = self.slot_around(self.goal);
+                self.avoid_side = None;
+            }
+            Decision::SetSpeed { speed } => self.params.speed = speed.max(0.0),
+        }
+    }
+
     fn step(&mut self, obs: &Observation, _inbox: &[Decoded]) -> Command {
         let mut cmd = Command::act(self.id, obs.tick);
         cmd.lidar_on = 1;

@@ -1,16 +1,323 @@
-//! `swarm fuzz`: seeded fault fuzzing of the consensus cores.
+//! `swarm fuzz`: seeded fault fuzzing of the consensus cores, and two seeded measurements
+//! (election times, quadrant leader uniqueness) on the same in-process harness.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::{Args, Subcommand};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::error::{SwarmError, SwarmResult};
-use clap::Subcommand;
+use crate::fuzz::{consensus, election, quadrant};
 
 /// `swarm fuzz <what>`.
 #[derive(Subcommand, Debug, Clone)]
 pub enum FuzzCmd {
-    /// The Raft-style election and replicated log.
-    Consensus,
+    /// The Raft-style election and replicated log: seeded faults, safety checked every tick,
+    /// liveness after the faults heal. Exit 0 when every seed holds.
+    Consensus(ConsensusArgs),
+    /// Measure ticks to the first leader and to re-election after the leader crashes.
+    Election(ElectionArgs),
+    /// Measure how often the quadrant leader choice leaves exactly one leader per group.
+    Quadrant(QuadrantArgs),
 }
 
-/// Runs a fuzzer.
-pub fn fuzz(_cmd: &FuzzCmd) -> SwarmResult<()> {
-    Err(SwarmError::User("swarm fuzz is not built yet".into()))
+/// `swarm fuzz consensus`.
+#[derive(Args, Debug, Clone)]
+pub struct ConsensusArgs {
+    /// Number of seeds to run.
+    #[arg(long)]
+    pub seeds: u64,
+    /// First seed.
+    #[arg(long, default_value_t = 0)]
+    pub start_seed: u64,
+    /// Print every seed's case and outcome.
+    #[arg(long)]
+    pub verbose: bool,
+    /// Write each failing seed's note stream to DIR/seed-<S>.events.jsonl.
+    #[arg(long, value_name = "DIR")]
+    pub dump: Option<PathBuf>,
+}
+
+/// `swarm fuzz election`.
+#[derive(Args, Debug, Clone)]
+pub struct ElectionArgs {
+    /// Robot counts.
+    #[arg(long, value_delimiter = ',', default_value = "9,50")]
+    pub robots: Vec<u32>,
+    /// Bernoulli loss probabilities.
+    #[arg(long, value_delimiter = ',', default_value = "0,0.2,0.4")]
+    pub loss: Vec<f64>,
+    /// Runs (seeds) per combination.
+    #[arg(long, default_value_t = 21)]
+    pub runs: u64,
+    /// First seed.
+    #[arg(long, default_value_t = 0)]
+    pub start_seed: u64,
+    /// Ticks between the first leader and its crash.
+    #[arg(long, default_value_t = 100)]
+    pub leader_wait: u64,
+}
+
+/// `swarm fuzz quadrant`.
+#[derive(Args, Debug, Clone)]
+pub struct QuadrantArgs {
+    /// Trials per group size (3 to 9 robots).
+    #[arg(long, default_value_t = 200)]
+    pub trials: u64,
+    /// Bernoulli loss of the claims.
+    #[arg(long, default_value_t = 0.0)]
+    pub loss: f64,
+    /// Square metres per robot of the disc the group is placed in (larger: sparser groups,
+    /// robots that do not all see each other).
+    #[arg(long, default_value_t = 1.0)]
+    pub area_per_robot: f64,
+    /// First seed.
+    #[arg(long, default_value_t = 0)]
+    pub start_seed: u64,
+}
+
+fn progress(total: u64) -> ProgressBar {
+    let pb = ProgressBar::with_draw_target(
+        Some(total),
+        if std::io::stderr().is_terminal() {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        },
+    );
+    pb.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len}  {per_sec}  {elapsed_precise}")
+            .expect("valid template"),
+    );
+    pb
+}
+
+fn user(msg: String) -> SwarmError {
+    SwarmError::User(msg)
+}
+
+fn check_loss(key: &str, p: f64) -> SwarmResult<()> {
+    if p.is_finite() && (0.0..=1.0).contains(&p) {
+        Ok(())
+    } else {
+        Err(user(format!("{key}: expected a number in [0, 1], got {p}")))
+    }
+}
+
+/// Runs a fuzzer or measurement.
+pub fn fuzz(cmd: &FuzzCmd) -> SwarmResult<()> {
+    match cmd {
+        FuzzCmd::Consensus(a) => fuzz_consensus(a),
+        FuzzCmd::Election(a) => fuzz_election(a),
+        FuzzCmd::Quadrant(a) => fuzz_quadrant(a),
+    }
+}
+
+fn fuzz_consensus(a: &ConsensusArgs) -> SwarmResult<()> {
+    if a.seeds == 0 {
+        return Err(user("--seeds: expected at least 1, got 0".into()));
+    }
+    let end = a.start_seed.checked_add(a.seeds).ok_or_else(|| {
+        user(format!(
+            "--start-seed {} + --seeds {} overflows a 64-bit seed",
+            a.start_seed, a.seeds
+        ))
+    })?;
+    if let Some(d) = &a.dump {
+        std::fs::create_dir_all(d)
+            .map_err(|e| user(format!("--dump {}: cannot create: {e}", d.display())))?;
+    }
+    let started = Instant::now();
+    let pb = progress(a.seeds);
+    let mut failed: Vec<u64> = Vec::new();
+    let mut ticks = 0u64;
+    let mut recovered: Vec<u64> = Vec::new();
+    let (mut left_for_notes, mut unsent) = (0u64, 0u64);
+    for seed in a.start_seed..end {
+        let case = consensus::draw(seed);
+        let out = consensus::run(&case, a.dump.is_some());
+        ticks += out.ticks;
+        left_for_notes += out.budget.0;
+        unsent += out.budget.1;
+        if let Some(r) = out.recovered_after {
+            recovered.push(r);
+        }
+        if a.verbose {
+            pb.suspend(|| {
+                println!(
+                    "seed {seed}: {} ({case}; {} ticks{})",
+                    if out.failures.is_empty() {
+                        "ok"
+                    } else {
+                        "FAIL"
+                    },
+                    out.ticks,
+                    out.recovered_after
+                        .map(|r| format!(", recovered {r} ticks after the heal"))
+                        .unwrap_or_default()
+                )
+            });
+        }
+        if !out.failures.is_empty() {
+            failed.push(seed);
+            pb.suspend(|| {
+                println!("seed {seed}: FAIL ({case})");
+                for f in &out.failures {
+                    println!("  {f}");
+                }
+                println!(
+                    "  reproduce: swarm fuzz consensus --seeds 1 --start-seed {seed} --verbose"
+                );
+            });
+            if let (Some(dir), Some(ev)) = (&a.dump, &out.events) {
+                let p = dir.join(format!("seed-{seed}.events.jsonl"));
+                std::fs::write(&p, ev)?;
+                pb.suspend(|| println!("  notes: {}", p.display()));
+            }
+        }
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    let secs = started.elapsed().as_secs_f64();
+    let mut rec = recovered.clone();
+    println!(
+        "{} seeds ({}..{}), {} failed; {:.1} seeds/s, {:.0} ticks/s; median recovery after heal {} ticks",
+        a.seeds,
+        a.start_seed,
+        end - 1,
+        failed.len(),
+        a.seeds as f64 / secs.max(1e-9),
+        ticks as f64 / secs.max(1e-9),
+        election::median(&mut rec).map_or("-".to_string(), |m| m.to_string())
+    );
+    println!(
+        "messages left unprocessed for lack of note room: {left_for_notes}; dropped for lack of free frames: {unsent}"
+    );
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(SwarmError::Internal(anyhow::anyhow!(
+            "{} of {} seeds failed: {:?}",
+            failed.len(),
+            a.seeds,
+            failed
+        )))
+    }
+}
+
+fn fuzz_election(a: &ElectionArgs) -> SwarmResult<()> {
+    if a.runs == 0 {
+        return Err(user("--runs: expected at least 1, got 0".into()));
+    }
+    for &n in &a.robots {
+        if !(1..=10_000).contains(&n) {
+            return Err(user(format!("--robots: expected 1..=10000, got {n}")));
+        }
+    }
+    for &p in &a.loss {
+        check_loss("--loss", p)?;
+    }
+    let end = a
+        .start_seed
+        .checked_add(a.runs)
+        .ok_or_else(|| user("--start-seed + --runs overflows a 64-bit seed".into()))?;
+    let pb = progress(a.robots.len() as u64 * a.loss.len() as u64 * a.runs);
+    let started = Instant::now();
+    let mut lines = Vec::new();
+    for &n in &a.robots {
+        for &loss in &a.loss {
+            let (mut first, mut re) = (Vec::new(), Vec::new());
+            for seed in a.start_seed..end {
+                let r = election::measure(n, loss, seed, a.leader_wait);
+                first.extend(r.first_leader);
+                re.extend(r.reelection);
+                pb.inc(1);
+            }
+            let span = |v: &mut Vec<u64>| match election::median(v) {
+                Some(m) => format!(
+                    "{m:>5} [{}..{}] ({}/{})",
+                    v[0],
+                    v[v.len() - 1],
+                    v.len(),
+                    a.runs
+                ),
+                None => format!("    - (0/{})", a.runs),
+            };
+            lines.push(format!(
+                "{n:>6} {:>5.0}%   {}   {}",
+                loss * 100.0,
+                span(&mut first),
+                span(&mut re)
+            ));
+        }
+    }
+    pb.finish_and_clear();
+    println!(
+        "robots  loss   first leader: median [min..max] (runs with one)   re-election after the leader's crash"
+    );
+    for l in lines {
+        println!("{l}");
+    }
+    println!(
+        "(ticks; seeds {}..{}; delay 2, capacity 4, election timeout 20..40, heartbeat 4; {:.1} s)",
+        a.start_seed,
+        end - 1,
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+fn fuzz_quadrant(a: &QuadrantArgs) -> SwarmResult<()> {
+    if a.trials == 0 {
+        return Err(user("--trials: expected at least 1, got 0".into()));
+    }
+    check_loss("--loss", a.loss)?;
+    if !(a.area_per_robot.is_finite() && a.area_per_robot > 0.0 && a.area_per_robot <= 1e4) {
+        return Err(user(format!(
+            "--area-per-robot: expected a number in (0, 10000], got {}",
+            a.area_per_robot
+        )));
+    }
+    let end = a
+        .start_seed
+        .checked_add(a.trials)
+        .ok_or_else(|| user("--start-seed + --trials overflows a 64-bit seed".into()))?;
+    let pb = progress(7 * a.trials);
+    let mut lines = Vec::new();
+    for n in 3..=9u32 {
+        let (mut one, mut all_see, mut unique, mut agree, mut leaders) = (0, 0, 0, 0, 0);
+        for seed in a.start_seed..end {
+            let t = quadrant::trial(n, a.loss, a.area_per_robot, seed);
+            one += (t.leaders == 1) as u64;
+            all_see += t.all_see_all as u64;
+            unique += t.unique_top as u64;
+            agree += t.agree as u64;
+            leaders += t.leaders as u64;
+            pb.inc(1);
+        }
+        let pct = |k: u64| 100.0 * k as f64 / a.trials as f64;
+        lines.push(format!(
+            "{n:>5}   {:>6.1}%     {:>6.1}%     {:>6.2}      {:>6.1}%      {:>6.1}%",
+            pct(one),
+            pct(agree),
+            leaders as f64 / a.trials as f64,
+            pct(unique),
+            pct(all_see)
+        ));
+    }
+    pb.finish_and_clear();
+    println!("group  one leader  all agree  leaders/group  unique top score  all see all");
+    for l in lines {
+        println!("{l}");
+    }
+    println!(
+        "({} trials per size, loss {}, {} m2 per robot, sensing range {} m)",
+        a.trials,
+        a.loss,
+        a.area_per_robot,
+        quadrant::SENSE_RANGE
+    );
+    Ok(())
 }

@@ -133,6 +133,11 @@ pub fn run(
         Ok(m) => merge(&mut metrics, m),
         Err(e) => tracing::warn!("could not compute metrics from the records: {e:#}"),
     }
+    if cfg.consensus.is_some() {
+        // From the record alone, so both modes give the same numbers.
+        let events = std::fs::read_to_string(dir.join("events.jsonl")).unwrap_or_default();
+        metrics["consensus"] = crate::consensus_check::consensus_metrics(&events);
+    }
     run_dir::write_metrics(&dir, &metrics)?;
     if let Err(e) = run_dir::write_plots(&dir, &cfg) {
         tracing::warn!("could not draw the trajectory plot: {e:#}");

@@ -124,6 +124,7 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
         ))
     });
     let csv_path = out.join("sweep.csv");
+    check_out_dir(&out)?;
     let existing = if csv_path.exists() {
         Some(read_existing(&csv_path, &plan, &configs, &out)?)
     } else {
@@ -198,7 +199,6 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
                 }
             });
         }
-        Event::Started(_) => {}
         Event::Finished(i, outcome) => {
             let spec = todo[i];
             let rel = format!("runs/{}", plan.dir_name(spec));
@@ -277,6 +277,31 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
         )));
     }
     Ok(())
+}
+
+/// `--out` must be new, empty, or a sweep directory (it has `sweep.csv`, or only `runs/` when
+/// no run had finished yet): the sweep replaces its `plots/` and run directories.
+fn check_out_dir(out: &Path) -> SwarmResult<()> {
+    let Ok(entries) = std::fs::read_dir(out) else {
+        if out.exists() {
+            return Err(SwarmError::User(format!(
+                "--out {}: not a directory",
+                out.display()
+            )));
+        }
+        return Ok(());
+    };
+    let names: Vec<String> = entries
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    if names.iter().any(|n| n == "sweep.csv") || names.iter().all(|n| n == "runs") {
+        return Ok(());
+    }
+    Err(SwarmError::User(format!(
+        "--out {}: exists and is not a sweep directory (no sweep.csv); give a new or empty directory",
+        out.display()
+    )))
 }
 
 fn mode(in_process: bool) -> &'static str {

@@ -56,8 +56,6 @@ pub enum Outcome {
 pub enum Event {
     /// The `n`-th Ctrl-C arrived and was forwarded to the running children.
     Interrupt(u32),
-    /// Job `index` started.
-    Started(usize),
     /// Job `index` ended.
     Finished(usize, Outcome),
 }
@@ -167,9 +165,7 @@ fn worker(jobs: &[Job], opts: &PoolOptions, shared: &Shared, tx: &Sender<Option<
     while !shared.stop.load(Ordering::SeqCst) {
         let i = shared.next.fetch_add(1, Ordering::SeqCst);
         let Some(job) = jobs.get(i) else { return };
-        let outcome = run_one(job, opts, shared, || {
-            let _ = tx.send(Some(Event::Started(i)));
-        });
+        let outcome = run_one(job, opts, shared);
         if tx.send(Some(Event::Finished(i, outcome))).is_err() {
             return;
         }
@@ -180,7 +176,7 @@ fn worker(jobs: &[Job], opts: &PoolOptions, shared: &Shared, tx: &Sender<Option<
 /// `active` lock after a last look at `stop`, so every child either sees a forwarded Ctrl-C
 /// or is never started. This thread waits for the child, so the child's parent-death signal
 /// (bound to the spawning thread) only fires if the sweep itself dies.
-fn run_one(job: &Job, opts: &PoolOptions, shared: &Shared, started: impl FnOnce()) -> Outcome {
+fn run_one(job: &Job, opts: &PoolOptions, shared: &Shared) -> Outcome {
     let mut child = {
         let mut active = shared.active.lock().unwrap_or_else(|e| e.into_inner());
         if shared.stop.load(Ordering::SeqCst) {
@@ -214,7 +210,6 @@ fn run_one(job: &Job, opts: &PoolOptions, shared: &Shared, started: impl FnOnce(
             }
         }
     };
-    started();
     let pid = child.id() as i32;
     let tail = child.stderr.take().map(|err| {
         std::thread::spawn(move || {

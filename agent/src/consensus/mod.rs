@@ -1,0 +1,343 @@
+//! Consensus among the robots: a Raft-style election and replicated log of swarm decisions
+//! ([`raft`]), or the quadrant leader choice of seed 001 ([`quadrant`]).
+//!
+//! The cores are pure state machines (no I/O, no clock, randomness seeded from the run seed
+//! and robot id). [`Consensus`] is the thin layer the [`crate::Agent`] calls once per tick:
+//! it feeds the tick's radio messages and the passage of time to the core, proposes the
+//! scheduled decisions, hands back the decisions to act on, and puts the core's messages into
+//! the command's spare radio frames and its notes into the command's report.
+//!
+//! Scheduled proposals are not forwarded: every robot has the schedule (it is in the config),
+//! so the robot that is leader at the proposal's tick, or the first one after it, proposes
+//! it; a decision already in the leader's log (put there by an earlier leader) is not
+//! proposed again.
+//!
+//! The Raft core alone, for a group of one (which elects itself):
+//!
+//! ```
+//! use swarmrt_agent::consensus::raft::{Proposed, Raft, RaftParams};
+//! use swarmrt_agent::consensus::{NOTE_BUDGET, Notes, stream};
+//! use swarmrt_protocol::consensus::{ConsensusNote, Decision, Role};
+//!
+//! let p = RaftParams { n: 1, election_min: 5, election_max: 10, heartbeat: 2,
+//!                      pre_vote: true, check_quorum: true };
+//! let mut raft = Raft::new(0, p, stream(42, "raft", 0));
+//! let mut notes = Notes::new(NOTE_BUDGET);
+//! while raft.role() != Role::Leader {
+//!     raft.tick(&mut notes); // time enters as ticks; messages would enter through step()
+//! }
+//! let d = Decision::SetGoal { x: 3.0, y: 4.0 };
+//! assert_eq!(raft.propose(0, d, &mut notes), Proposed::Appended);
+//! while raft.next_apply(&mut notes).is_some() {} // the no-op, then the decision
+//! assert_eq!(raft.applied(), 2);
+//! // Every change was reported, for the run record and the checker.
+//! assert!(notes.as_slice().iter().any(|n| matches!(n, ConsensusNote::Apply { index: 2, .. })));
+//! ```
+
+pub mod log;
+pub mod quadrant;
+pub mod raft;
+
+use rand::Rng as _;
+use swarmrt_protocol::config::Config;
+use swarmrt_protocol::consensus::{
+    Algorithm, ConsensusConfig, ConsensusNote, Decision, Item, SentCounts,
+};
+use swarmrt_protocol::{Command, MAX_REPORT, Note, Observation, RadioMsg};
+
+use crate::agent::Decoded;
+use quadrant::Quadrant;
+use raft::{Persistent, Raft, RaftParams};
+
+/// Every random draw of the cores comes from the run's shared seeded streams.
+pub use swarmrt_protocol::rng::{Rng, stream};
+
+/// Report bytes kept free for the behaviour's own notes.
+pub const BEHAVIOUR_NOTE_RESERVE: usize = 32;
+/// Report bytes consensus notes may use per tick: the report minus the behaviour's share
+/// and the two bytes of the note list's length prefix.
+pub const NOTE_BUDGET: usize = MAX_REPORT - BEHAVIOUR_NOTE_RESERVE - 2;
+
+/// One tick's consensus notes with their encoded size, so they always fit the report.
+#[derive(Debug, Clone, Default)]
+pub struct Notes {
+    notes: Vec<ConsensusNote>,
+    used: usize,
+    reserved: usize,
+    cap: usize,
+}
+
+impl Notes {
+    /// An empty list that may hold `cap` encoded bytes.
+    pub fn new(cap: usize) -> Notes {
+        Notes {
+            cap,
+            ..Notes::default()
+        }
+    }
+
+    /// Encoded size of `n` as one element of the report's `Vec<Note>` (one byte for the
+    /// `Note::Consensus` tag).
+    pub fn cost(n: &ConsensusNote) -> usize {
+        let mut buf = [0u8; 96];
+        1 + postcard::to_slice(n, &mut buf).map_or(96, |b| b.len())
+    }
+
+    /// Bytes still free (minus reservations).
+    pub fn room(&self) -> usize {
+        self.cap.saturating_sub(self.used + self.reserved)
+    }
+
+    /// Keeps `bytes` free for a later step of this tick.
+    pub fn reserve(&mut self, bytes: usize) {
+        self.reserved += bytes;
+    }
+
+    /// Returns a reservation.
+    pub fn release(&mut self, bytes: usize) {
+        self.reserved = self.reserved.saturating_sub(bytes);
+    }
+
+    /// Adds a note (callers check [`Notes::room`] before changing state).
+    pub fn push(&mut self, n: ConsensusNote) {
+        self.used += Self::cost(&n);
+        self.notes.push(n);
+    }
+
+    /// The notes so far.
+    pub fn as_slice(&self) -> &[ConsensusNote] {
+        &self.notes
+    }
+
+    /// Takes the notes, leaving the list empty.
+    pub fn take(&mut self) -> Vec<ConsensusNote> {
+        self.used = 0;
+        self.reserved = 0;
+        std::mem::take(&mut self.notes)
+    }
+}
+
+enum Core {
+    Raft(Box<Raft>),
+    Quadrant(Quadrant),
+}
+
+/// A robot's consensus layer.
+pub struct Consensus {
+    core: Core,
+    schedule: Vec<(u64, Decision)>,
+    /// Scheduled decisions applied by this robot (so far since its last start).
+    applied_ids: Vec<bool>,
+    notes: Notes,
+    boot: Option<ConsensusNote>,
+    sent: SentCounts,
+    sent_noted: SentCounts,
+    stats_every: u64,
+    capacity: usize,
+    tick: u64,
+}
+
+/// Upper bound of a [`ConsensusNote::Sent`] note.
+fn sent_note_bound() -> usize {
+    Notes::cost(&ConsensusNote::Sent(SentCounts {
+        pre_vote: u32::MAX,
+        pre_vote_resp: u32::MAX,
+        vote: u32::MAX,
+        vote_resp: u32::MAX,
+        append: u32::MAX,
+        append_resp: u32::MAX,
+        quad_claim: u32::MAX,
+        quad_leader: u32::MAX,
+    }))
+}
+
+impl Consensus {
+    /// Robot `id`'s consensus layer, or `None` when the scenario has no `[consensus]`.
+    pub fn new(cfg: &Config, id: u32) -> Option<Consensus> {
+        Self::build(cfg, id, None, 0)
+    }
+
+    /// Robot `id` restarting after a crash with the persistent state it had (`incarnation`
+    /// counts its restarts and keys a fresh random stream for its timeouts).
+    pub fn restore(
+        cfg: &Config,
+        id: u32,
+        state: Persistent,
+        incarnation: u32,
+    ) -> Option<Consensus> {
+        Self::build(cfg, id, Some(state), incarnation)
+    }
+
+    fn build(
+        cfg: &Config,
+        id: u32,
+        state: Option<Persistent>,
+        incarnation: u32,
+    ) -> Option<Consensus> {
+        let c: &ConsensusConfig = cfg.consensus.as_ref()?;
+        let seed = cfg.scenario.seed;
+        let stream_id = id as u64 | (incarnation as u64) << 32;
+        let core = match c.algorithm {
+            Algorithm::Raft => {
+                let p = RaftParams {
+                    n: cfg.robots.count,
+                    election_min: c.election_timeout_min,
+                    election_max: c.election_timeout_max,
+                    heartbeat: c.heartbeat_ticks,
+                    pre_vote: c.pre_vote,
+                    check_quorum: c.check_quorum,
+                };
+                let rng = stream(seed, "raft", stream_id);
+                Core::Raft(Box::new(match state {
+                    Some(s) => Raft::restore(id, p, s, rng),
+                    None => Raft::new(id, p, rng),
+                }))
+            }
+            Algorithm::Quadrant => {
+                let draw = stream(seed, "quadrant", id as u64).random::<u32>();
+                Core::Quadrant(Quadrant::new(
+                    id,
+                    c.quadrant.claim_period,
+                    c.quadrant.decide_tick,
+                    draw,
+                ))
+            }
+        };
+        let boot = match &core {
+            Core::Raft(r) => Some(r.boot_note()),
+            Core::Quadrant(_) => None,
+        };
+        Some(Consensus {
+            core,
+            schedule: c.propose.iter().map(|p| (p.tick, p.decision())).collect(),
+            applied_ids: vec![false; c.propose.len()],
+            notes: Notes::new(NOTE_BUDGET),
+            boot,
+            sent: SentCounts::default(),
+            sent_noted: SentCounts::default(),
+            stats_every: c.stats_every.max(1) as u64,
+            capacity: cfg.radio.capacity as usize,
+            tick: 0,
+        })
+    }
+
+    /// The Raft core, when this robot runs Raft.
+    pub fn raft(&self) -> Option<&Raft> {
+        match &self.core {
+            Core::Raft(r) => Some(r),
+            Core::Quadrant(_) => None,
+        }
+    }
+
+    /// The quadrant core, when this robot runs the quadrant leader choice.
+    pub fn quadrant(&self) -> Option<&Quadrant> {
+        match &self.core {
+            Core::Quadrant(q) => Some(q),
+            Core::Raft(_) => None,
+        }
+    }
+
+    /// What must survive a crash (Raft only).
+    pub fn persistent(&self) -> Option<Persistent> {
+        self.raft().map(|r| r.persistent())
+    }
+
+    /// Messages sent so far, per kind.
+    pub fn sent(&self) -> SentCounts {
+        self.sent
+    }
+
+    /// Feeds this tick's messages and the passage of time; returns the committed decisions
+    /// to act on now, in log order.
+    pub fn step(&mut self, obs: &Observation, inbox: &[Decoded]) -> Vec<Decision> {
+        self.tick = obs.tick;
+        self.notes = Notes::new(NOTE_BUDGET);
+        if let Some(b) = self.boot.take() {
+            self.notes.push(b);
+        }
+        let stats_due = obs.tick.is_multiple_of(self.stats_every);
+        let stats_bound = if stats_due { sent_note_bound() } else { 0 };
+        self.notes.reserve(stats_bound);
+        let mut out = Vec::new();
+        match &mut self.core {
+            Core::Raft(r) => {
+                // Time's notes are reserved first so a busy inbox cannot starve the timers.
+                let tick_bound = r.tick_bound();
+                self.notes.reserve(tick_bound);
+                for d in inbox {
+                    if let RadioMsg::Consensus(m) = &d.msg {
+                        r.step(d.src, m, &mut self.notes);
+                    }
+                }
+                self.notes.release(tick_bound);
+                r.tick(&mut self.notes);
+                for (k, &(at, decision)) in self.schedule.iter().enumerate() {
+                    if at <= obs.tick && !self.applied_ids[k] {
+                        let id = k as u16;
+                        if r.propose(id, decision, &mut self.notes) == raft::Proposed::NoRoom {
+                            break;
+                        }
+                    }
+                }
+                while let Some(e) = r.next_apply(&mut self.notes) {
+                    if let Item::Decision { id, decision } = e.item {
+                        if let Some(done) = self.applied_ids.get_mut(id as usize) {
+                            *done = true;
+                        }
+                        out.push(decision);
+                    }
+                }
+            }
+            Core::Quadrant(q) => {
+                q.observe(obs.neighbours());
+                for d in inbox {
+                    if let RadioMsg::Consensus(m) = &d.msg {
+                        q.step(d.src, m);
+                    }
+                }
+                q.tick(obs.tick, &mut self.notes);
+            }
+        }
+        self.notes.release(stats_bound);
+        out
+    }
+
+    /// Puts this tick's messages into the command's free frames (up to `radio.capacity`) and
+    /// this tick's notes into its report, after the behaviour's notes.
+    pub fn finish(&mut self, cmd: &mut Command) {
+        let budget = self.capacity.saturating_sub(cmd.outbox().len());
+        let msgs = match &mut self.core {
+            Core::Raft(r) => r.ready(budget),
+            Core::Quadrant(q) => q.ready(budget),
+        };
+        for (dst, m) in msgs {
+            let msg = RadioMsg::Consensus(m);
+            if cmd.push_frame(dst, &msg).is_ok()
+                && let RadioMsg::Consensus(m) = &msg
+            {
+                self.sent.count(m);
+            }
+        }
+        if self.tick.is_multiple_of(self.stats_every) && self.sent != self.sent_noted {
+            self.sent_noted = self.sent;
+            self.notes.push(ConsensusNote::Sent(self.sent));
+        }
+        let mine = self.notes.take();
+        if mine.is_empty() {
+            return;
+        }
+        let mut all = cmd.notes().unwrap_or_default();
+        let theirs = all.len();
+        all.extend(mine.iter().cloned().map(Note::Consensus));
+        if cmd.set_notes(&all).is_err() {
+            // The behaviour used more than its share: consensus notes must reach the record
+            // (the checker rebuilds every log from them), so they win.
+            tracing::warn!(
+                dropped = theirs,
+                "behaviour notes dropped: report full with consensus notes"
+            );
+            let only: Vec<Note> = mine.into_iter().map(Note::Consensus).collect();
+            let _ = cmd.set_notes(&only);
+        }
+    }
+}

@@ -1,0 +1,353 @@
+//! The Raft core on its own, in a tiny in-memory network (after raft-rs's
+//! `harness/src/network.rs`): messages take one tick, links can be cut, robots isolated.
+
+use std::collections::BTreeSet;
+
+use swarmrt_agent::consensus::raft::{Persistent, Proposed, Raft, RaftParams};
+use swarmrt_agent::consensus::{NOTE_BUDGET, Notes, stream};
+use swarmrt_protocol::BROADCAST;
+use swarmrt_protocol::consensus::{ConsensusMsg, ConsensusNote, Decision, Entry, Item, Role};
+
+struct Net {
+    nodes: Vec<Raft>,
+    /// Messages to deliver at the next tick: (from, to, msg).
+    wire: Vec<(u32, u32, ConsensusMsg)>,
+    /// Directed links that lose everything.
+    cut: BTreeSet<(u32, u32)>,
+    /// Every note, per robot, in order.
+    notes: Vec<Vec<ConsensusNote>>,
+    tick: u64,
+}
+
+fn params(n: u32, pre_vote: bool) -> RaftParams {
+    RaftParams {
+        n,
+        election_min: 10,
+        election_max: 20,
+        heartbeat: 2,
+        pre_vote,
+        check_quorum: true,
+    }
+}
+
+impl Net {
+    fn new(n: u32, pre_vote: bool) -> Net {
+        Net {
+            nodes: (0..n)
+                .map(|i| Raft::new(i, params(n, pre_vote), stream(7, "test", i as u64)))
+                .collect(),
+            wire: Vec::new(),
+            cut: BTreeSet::new(),
+            notes: vec![Vec::new(); n as usize],
+            tick: 0,
+        }
+    }
+
+    fn isolate(&mut self, r: u32) {
+        for o in 0..self.nodes.len() as u32 {
+            if o != r {
+                self.cut.insert((r, o));
+                self.cut.insert((o, r));
+            }
+        }
+    }
+
+    /// One tick: deliver, step, tick, collect messages (4 frames each).
+    fn step(&mut self) {
+        let wire = std::mem::take(&mut self.wire);
+        for (i, node) in self.nodes.iter_mut().enumerate() {
+            let mut notes = Notes::new(NOTE_BUDGET);
+            for (from, to, m) in &wire {
+                if *to == i as u32 {
+                    node.step(*from, m, &mut notes);
+                }
+            }
+            node.tick(&mut notes);
+            while node.next_apply(&mut notes).is_some() {}
+            self.notes[i].extend(notes.take());
+        }
+        let n = self.nodes.len() as u32;
+        for (i, node) in self.nodes.iter_mut().enumerate() {
+            let from = i as u32;
+            for (dst, m) in node.ready(4) {
+                let targets: Vec<u32> = if dst == BROADCAST {
+                    (0..n).filter(|&o| o != from).collect()
+                } else {
+                    vec![dst]
+                };
+                for to in targets {
+                    if !self.cut.contains(&(from, to)) {
+                        self.wire.push((from, to, m.clone()));
+                    }
+                }
+            }
+        }
+        self.tick += 1;
+    }
+
+    fn run(&mut self, ticks: u64) {
+        for _ in 0..ticks {
+            self.step();
+        }
+    }
+
+    fn leaders(&self) -> Vec<(u32, u64)> {
+        self.nodes
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.role() == Role::Leader)
+            .map(|(i, r)| (i as u32, r.term()))
+            .collect()
+    }
+
+    fn run_until_leader(&mut self, limit: u64) -> u32 {
+        for _ in 0..limit {
+            self.step();
+            if let [(l, _)] = self.leaders()[..] {
+                return l;
+            }
+        }
+        panic!(
+            "no single leader within {limit} ticks: {:?}",
+            self.leaders()
+        );
+    }
+}
+
+#[test]
+fn three_robots_elect_one_leader_and_commit_its_noop_everywhere() {
+    let mut net = Net::new(3, true);
+    let l = net.run_until_leader(200);
+    net.run(10);
+    assert_eq!(net.leaders(), vec![(l, net.nodes[l as usize].term())]);
+    for r in &net.nodes {
+        assert_eq!(r.leader(), Some(l));
+        assert_eq!(r.commit(), 1, "the leader's no-op is committed");
+        assert_eq!(r.applied(), 1);
+        assert_eq!(r.log().get(1).unwrap().item, Item::Noop);
+    }
+}
+
+#[test]
+fn a_proposal_is_committed_and_applied_by_all_and_never_proposed_twice() {
+    let mut net = Net::new(5, true);
+    let l = net.run_until_leader(300) as usize;
+    let d = Decision::SetGoal { x: 3.0, y: 4.0 };
+    let mut notes = Notes::new(NOTE_BUDGET);
+    assert_eq!(net.nodes[l].propose(0, d, &mut notes), Proposed::Appended);
+    assert_eq!(
+        net.nodes[l].propose(0, d, &mut notes),
+        Proposed::AlreadyInLog
+    );
+    let other = (l + 1) % 5;
+    assert_eq!(
+        net.nodes[other].propose(1, d, &mut notes),
+        Proposed::NotLeader
+    );
+    net.run(10);
+    for r in &net.nodes {
+        assert_eq!(r.commit(), 2);
+        assert_eq!(
+            r.log().get(2).unwrap().item,
+            Item::Decision { id: 0, decision: d }
+        );
+    }
+}
+
+#[test]
+fn pre_vote_keeps_a_returning_robot_from_deposing_the_leader() {
+    // With pre-vote the isolated robot never raises its term, so when it hears the leader
+    // again it simply follows. Without pre-vote (the control) it comes back with a higher
+    // term and the leader is deposed: the assertion below is what pre-vote buys.
+    for pre_vote in [true, false] {
+        let mut net = Net::new(5, pre_vote);
+        let l = net.run_until_leader(300);
+        let term = net.nodes[l as usize].term();
+        let drifter = (l + 1) % 5;
+        net.isolate(drifter);
+        net.run(200);
+        net.cut.clear();
+        net.run(60);
+        let still = net.leaders() == vec![(l, term)];
+        if pre_vote {
+            assert!(still, "leader kept: {:?}", net.leaders());
+            assert_eq!(net.nodes[drifter as usize].term(), term);
+            assert_eq!(net.nodes[drifter as usize].leader(), Some(l));
+        } else {
+            assert!(!still, "without pre-vote the drifter deposes the leader");
+            assert!(net.nodes[l as usize].term() > term);
+        }
+    }
+}
+
+#[test]
+fn a_partitioned_minority_leader_steps_down_and_its_entries_are_replaced() {
+    let mut net = Net::new(5, true);
+    let l = net.run_until_leader(300);
+    // Cut the leader and one follower off from the other three.
+    let minority = [l, (l + 1) % 5];
+    for &a in &minority {
+        for b in 0..5 {
+            if !minority.contains(&b) {
+                net.cut.insert((a, b));
+                net.cut.insert((b, a));
+            }
+        }
+    }
+    let mut notes = Notes::new(NOTE_BUDGET);
+    let stale = Decision::SetSpeed { speed: 0.1 };
+    assert_eq!(
+        net.nodes[l as usize].propose(0, stale, &mut notes),
+        Proposed::Appended
+    );
+    net.run(150);
+    // The majority elected a new leader; the old one stepped down (check-quorum).
+    let leaders = net.leaders();
+    assert_eq!(leaders.len(), 1, "{leaders:?}");
+    let new = leaders[0].0;
+    assert!(!minority.contains(&new));
+    let fresh = Decision::SetSpeed { speed: 0.3 };
+    assert_eq!(
+        net.nodes[new as usize].propose(1, fresh, &mut notes),
+        Proposed::Appended
+    );
+    net.run(20);
+    net.cut.clear();
+    net.run(60);
+    // The old leader's uncommitted entry was truncated: every log holds the new decision,
+    // none the stale one, and every robot committed the same prefix.
+    for r in &net.nodes {
+        assert!(r.log().has_decision(1), "robot follows the new leader");
+        assert!(!r.log().has_decision(0));
+        assert_eq!(r.commit(), net.nodes[new as usize].commit());
+    }
+    let old = &net.notes[l as usize];
+    assert!(
+        old.iter()
+            .any(|n| matches!(n, ConsensusNote::Truncate { .. })),
+        "the old leader reported the truncation"
+    );
+}
+
+#[test]
+fn votes_need_an_up_to_date_log_and_are_refused_inside_the_lease() {
+    let p = params(3, true);
+    let mut r = Raft::new(0, p, stream(1, "t", 0));
+    let mut notes = Notes::new(NOTE_BUDGET);
+    // Robot 1 leads term 1 and gives robot 0 two entries.
+    let e = Entry {
+        term: 1,
+        item: Item::Noop,
+    };
+    r.step(
+        1,
+        &ConsensusMsg::Append {
+            term: 1,
+            prev_index: 0,
+            prev_term: 0,
+            commit: 0,
+            entries: vec![e, e],
+        },
+        &mut notes,
+    );
+    assert_eq!(r.log().last_index(), 2);
+    // Inside the lease a higher-term vote request is ignored: no answer, no term change.
+    r.step(
+        2,
+        &ConsensusMsg::Vote {
+            term: 5,
+            last_index: 9,
+            last_term: 4,
+        },
+        &mut notes,
+    );
+    assert_eq!(r.term(), 1);
+    assert!(r.ready(4).iter().all(|(to, _)| *to == 1), "only the ack");
+    // After the lease, a candidate with a shorter log is refused, a current one granted.
+    let mut quiet = Notes::new(NOTE_BUDGET);
+    for _ in 0..p.election_min {
+        r.tick(&mut quiet);
+    }
+    let mut r2 = r.clone();
+    r.step(
+        2,
+        &ConsensusMsg::Vote {
+            term: 5,
+            last_index: 1,
+            last_term: 1,
+        },
+        &mut notes,
+    );
+    assert_eq!(r.term(), 5);
+    assert_eq!(r.vote(), None);
+    assert!(r.ready(4).contains(&(
+        2,
+        ConsensusMsg::VoteResp {
+            term: 5,
+            granted: false
+        }
+    )));
+    r2.step(
+        2,
+        &ConsensusMsg::Vote {
+            term: 5,
+            last_index: 2,
+            last_term: 1,
+        },
+        &mut notes,
+    );
+    assert_eq!(r2.vote(), Some(2));
+}
+
+#[test]
+fn a_message_whose_notes_do_not_fit_is_left_unprocessed() {
+    let mut r = Raft::new(0, params(3, true), stream(1, "t", 0));
+    let e = Entry {
+        term: 1,
+        item: Item::Noop,
+    };
+    let msg = ConsensusMsg::Append {
+        term: 1,
+        prev_index: 0,
+        prev_term: 0,
+        commit: 0,
+        entries: vec![e; 4],
+    };
+    let mut tight = Notes::new(20);
+    assert!(!r.step(1, &msg, &mut tight));
+    assert_eq!((r.term(), r.log().last_index()), (0, 0), "state untouched");
+    assert_eq!(r.left_for_notes(), 1);
+    let mut roomy = Notes::new(NOTE_BUDGET);
+    assert!(r.step(1, &msg, &mut roomy));
+    assert_eq!(r.log().last_index(), 4);
+}
+
+#[test]
+fn a_restarted_robot_keeps_term_vote_and_log_and_reapplies() {
+    let mut net = Net::new(3, true);
+    net.run_until_leader(300);
+    net.run(10);
+    let before: Persistent = net.nodes[0].persistent();
+    let mut again = Raft::restore(
+        0,
+        params(3, true),
+        before.clone(),
+        stream(7, "test", 1 << 32),
+    );
+    assert_eq!(
+        again.boot_note(),
+        ConsensusNote::Boot {
+            term: before.term,
+            vote: before.vote,
+            last_index: before.log.last_index(),
+            commit: before.commit
+        }
+    );
+    assert_eq!(again.role(), Role::Follower);
+    let mut notes = Notes::new(NOTE_BUDGET);
+    let mut reapplied = 0;
+    while again.next_apply(&mut notes).is_some() {
+        reapplied += 1;
+    }
+    assert_eq!(reapplied, before.commit);
+}

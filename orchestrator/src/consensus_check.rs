@@ -1,0 +1,931 @@
+//! Checks a run's consensus from its notes alone (`events.jsonl`, or the same note stream in
+//! memory) and computes the consensus metrics.
+//!
+//! Robots report every change of their Raft state as a [`ConsensusNote`]; the checker rebuilds
+//! each robot's term, vote, role, log (index, term, digest), commit and apply sequence from
+//! them and verifies, after every note and at the end of every tick, the properties of Raft's
+//! Figure 3 (Ongaro & Ousterhout 2014):
+//!
+//! - **election safety**: at most one leader per term (and a leader voted for itself);
+//! - **log matching**: two logs holding an entry with the same index and term are identical
+//!   up to it (checked with a hash chain per log: the chain at (index, term) must be unique);
+//! - **leader completeness**: a leader of term T holds every entry committed with a term
+//!   <= T, and nobody truncates an entry it has committed;
+//! - **state machine safety**: no two robots commit or apply different entries at one index;
+//! - **monotonicity**: per robot, the term never decreases, the vote never changes within a
+//!   term, the commit index never decreases, entries are applied in order 1, 2, ...
+//!
+//! A `Boot` note restarts a robot's view: with its persistent state (term, vote, log, commit)
+//! intact the view carries on; a restart that lost state ("amnesia": lower term, shorter log
+//! or commit than recorded) is counted, not reported as a violation by itself, because Raft
+//! assumes stable storage; what it then breaks (two leaders in a term, ...) is reported. A
+//! robot whose notes stop because it died is simply no longer checked.
+
+use std::collections::BTreeMap;
+
+use serde_json::{Value, json};
+use swarmrt_protocol::Note;
+use swarmrt_protocol::consensus::{ConsensusNote, Decision, Role, SentCounts};
+
+/// A broken property.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Violation {
+    /// Tick of the note (or the end of tick) at which it was seen.
+    pub tick: u64,
+    /// The robot whose note exposed it.
+    pub robot: u32,
+    /// Which property: `election_safety`, `log_matching`, `leader_completeness`,
+    /// `state_machine_safety`, `monotonic_term`, `monotonic_vote`, `monotonic_commit`,
+    /// `apply_order` or `record` (a note stream that contradicts itself).
+    pub property: &'static str,
+    /// What exactly.
+    pub detail: String,
+}
+
+impl std::fmt::Display for Violation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "tick {} robot {}: {}: {}",
+            self.tick, self.robot, self.property, self.detail
+        )
+    }
+}
+
+#[derive(Debug, Clone)]
+struct View {
+    alive: bool,
+    term: u64,
+    role: Role,
+    vote: Option<u32>,
+    /// (term, digest) per index - 1.
+    log: Vec<(u64, u32)>,
+    /// chain[i] = hash of log[..i]; chain[0] is the empty prefix.
+    chain: Vec<u64>,
+    commit: u64,
+    applied: u64,
+    /// Committed prefix already verified against this robot's log while it leads.
+    completeness_checked: u64,
+    sent: SentCounts,
+    sent_before: SentCounts,
+    quadrant: Option<(u32, u8)>,
+}
+
+impl Default for View {
+    fn default() -> Self {
+        View {
+            alive: true,
+            term: 0,
+            role: Role::Follower,
+            vote: None,
+            log: Vec::new(),
+            chain: vec![CHAIN_SEED],
+            commit: 0,
+            applied: 0,
+            completeness_checked: 0,
+            sent: SentCounts::default(),
+            sent_before: SentCounts::default(),
+            quadrant: None,
+        }
+    }
+}
+
+const CHAIN_SEED: u64 = 0xcbf2_9ce4_8422_2325;
+
+fn chain(prev: u64, term: u64, digest: u32) -> u64 {
+    let mut h = prev;
+    for b in term.to_le_bytes().into_iter().chain(digest.to_le_bytes()) {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+#[derive(Debug, Clone)]
+struct Proposal {
+    tick: u64,
+    robot: u32,
+    id: u16,
+    decision: Decision,
+}
+
+/// The checker's state: one view per robot plus what all robots share.
+#[derive(Debug, Clone, Default)]
+pub struct Checker {
+    robots: BTreeMap<u32, View>,
+    /// Election safety: the leader of each term.
+    leaders: BTreeMap<u64, u32>,
+    /// Log matching: the chain hash of the log prefix ending at each (index, term).
+    entries: BTreeMap<(u64, u64), u64>,
+    /// The committed prefix, (term, digest) per index - 1.
+    committed: Vec<(u64, u32)>,
+    /// First tick at which each index was committed (index - 1).
+    committed_tick: Vec<u64>,
+    /// What some robot applied at each index.
+    applied: BTreeMap<u64, (u64, u32)>,
+    /// Robots that applied each index.
+    applied_by: BTreeMap<u64, std::collections::BTreeSet<u32>>,
+    proposals: BTreeMap<(u64, u64), Proposal>,
+    violations: Vec<Violation>,
+    // Metrics.
+    first_leader_tick: Option<u64>,
+    current_leader: Option<(u32, u64)>,
+    last_leader: Option<u32>,
+    leaderless_since: Option<u64>,
+    reelection_ticks: Vec<u64>,
+    leader_changes: u64,
+    amnesia: u64,
+    last_tick: u64,
+    notes: u64,
+}
+
+impl Checker {
+    /// An empty checker.
+    pub fn new() -> Checker {
+        Checker::default()
+    }
+
+    /// Every violation found so far, in the order found.
+    pub fn violations(&self) -> &[Violation] {
+        &self.violations
+    }
+
+    /// Restarts that lost persistent state.
+    pub fn amnesia_restarts(&self) -> u64 {
+        self.amnesia
+    }
+
+    /// The highest-term leader, if one holds office now.
+    pub fn current_leader(&self) -> Option<(u32, u64)> {
+        self.current_leader
+    }
+
+    /// Length of the committed prefix.
+    pub fn committed(&self) -> u64 {
+        self.committed.len() as u64
+    }
+
+    /// First tick a leader appeared.
+    pub fn first_leader_tick(&self) -> Option<u64> {
+        self.first_leader_tick
+    }
+
+    /// Ticks from each leader's death or disappearance to the next leader.
+    pub fn reelection_ticks(&self) -> &[u64] {
+        &self.reelection_ticks
+    }
+
+    /// Last index robot `r` applied (0 if unknown).
+    pub fn applied_by(&self, r: u32) -> u64 {
+        self.robots.get(&r).map_or(0, |v| v.applied)
+    }
+
+    fn violation(&mut self, tick: u64, robot: u32, property: &'static str, detail: String) {
+        self.violations.push(Violation {
+            tick,
+            robot,
+            property,
+            detail,
+        });
+    }
+
+    fn leader_gone(&mut self, tick: u64, robot: u32) {
+        if self.current_leader.map(|l| l.0) == Some(robot) {
+            self.current_leader = None;
+            self.leaderless_since.get_or_insert(tick);
+        }
+    }
+
+    /// A robot's process died at `tick`: its notes stop; it no longer counts as leader.
+    pub fn died(&mut self, tick: u64, robot: u32) {
+        self.last_tick = self.last_tick.max(tick);
+        self.robots.entry(robot).or_default().alive = false;
+        self.leader_gone(tick, robot);
+    }
+
+    /// One note of robot `r` at `tick`, in record order.
+    pub fn note(&mut self, tick: u64, r: u32, note: &ConsensusNote) {
+        self.last_tick = self.last_tick.max(tick);
+        self.notes += 1;
+        let mut v = self.robots.remove(&r).unwrap_or_default();
+        v.alive = true;
+        self.apply_note(tick, r, &mut v, note);
+        self.robots.insert(r, v);
+    }
+
+    fn apply_note(&mut self, tick: u64, r: u32, v: &mut View, note: &ConsensusNote) {
+        match *note {
+            ConsensusNote::Boot {
+                term,
+                vote,
+                last_index,
+                commit,
+            } => {
+                let len = v.log.len() as u64;
+                if term < v.term || last_index < len || commit < v.commit {
+                    self.amnesia += 1;
+                } else if last_index > len {
+                    self.violation(
+                        tick,
+                        r,
+                        "record",
+                        format!("boot with {last_index} entries, record shows {len}"),
+                    );
+                }
+                v.log.truncate(last_index.min(len) as usize);
+                v.chain.truncate(v.log.len() + 1);
+                v.term = term;
+                v.vote = vote;
+                v.role = Role::Follower;
+                v.commit = commit.min(v.log.len() as u64);
+                v.applied = 0;
+                v.completeness_checked = 0;
+                add_counts(&mut v.sent_before, &v.sent);
+                v.sent = SentCounts::default();
+                self.leader_gone(tick, r);
+            }
+            ConsensusNote::State { term, role, vote } => {
+                if term < v.term {
+                    self.violation(
+                        tick,
+                        r,
+                        "monotonic_term",
+                        format!("term went from {} to {term}", v.term),
+                    );
+                } else if term == v.term && v.vote.is_some() && vote != v.vote {
+                    self.violation(
+                        tick,
+                        r,
+                        "monotonic_vote",
+                        format!("vote in term {term} changed from {:?} to {vote:?}", v.vote),
+                    );
+                }
+                let was_leader = v.role == Role::Leader && v.term == term;
+                v.term = term;
+                v.vote = vote;
+                v.role = role;
+                if role == Role::Leader && !was_leader {
+                    v.completeness_checked = 0;
+                    if vote != Some(r) {
+                        self.violation(
+                            tick,
+                            r,
+                            "election_safety",
+                            format!("leader of term {term} voted for {vote:?}, not itself"),
+                        );
+                    }
+                    match self.leaders.get(&term) {
+                        Some(&other) if other != r => self.violation(
+                            tick,
+                            r,
+                            "election_safety",
+                            format!("second leader of term {term} (robot {other} leads it)"),
+                        ),
+                        _ => {
+                            self.leaders.insert(term, r);
+                        }
+                    }
+                    self.new_leader(tick, r, term);
+                } else if role != Role::Leader {
+                    self.leader_gone(tick, r);
+                }
+            }
+            ConsensusNote::Append {
+                index,
+                term,
+                digest,
+            } => {
+                let len = v.log.len() as u64;
+                if index != len + 1 {
+                    self.violation(
+                        tick,
+                        r,
+                        "record",
+                        format!("append at {index} to a log of {len} entries"),
+                    );
+                }
+                // Resynchronise so one bad note does not cascade.
+                let keep = index.saturating_sub(1).min(len) as usize;
+                v.log.truncate(keep);
+                v.chain.truncate(keep + 1);
+                while (v.log.len() as u64) < index.saturating_sub(1) {
+                    v.log.push((u64::MAX, 0));
+                    let c = chain(v.chain[v.chain.len() - 1], u64::MAX, 0);
+                    v.chain.push(c);
+                }
+                v.log.push((term, digest));
+                let c = chain(v.chain[v.chain.len() - 1], term, digest);
+                v.chain.push(c);
+                match self.entries.get(&(index, term)) {
+                    Some(&other) if other != c => self.violation(
+                        tick,
+                        r,
+                        "log_matching",
+                        format!(
+                            "entry ({index}, term {term}) ends a prefix that differs from another robot's"
+                        ),
+                    ),
+                    Some(_) => {}
+                    None => {
+                        self.entries.insert((index, term), c);
+                    }
+                }
+            }
+            ConsensusNote::Truncate { index } => {
+                let len = v.log.len() as u64;
+                if index == 0 || index > len {
+                    self.violation(
+                        tick,
+                        r,
+                        "record",
+                        format!("truncate from {index} in a log of {len} entries"),
+                    );
+                }
+                if index <= v.commit {
+                    self.violation(
+                        tick,
+                        r,
+                        "leader_completeness",
+                        format!(
+                            "removed committed entries from {index} (commit {})",
+                            v.commit
+                        ),
+                    );
+                }
+                let keep = index.saturating_sub(1).min(len) as usize;
+                v.log.truncate(keep);
+                v.chain.truncate(keep + 1);
+            }
+            ConsensusNote::Commit { index } => {
+                if index <= v.commit {
+                    self.violation(
+                        tick,
+                        r,
+                        "monotonic_commit",
+                        format!("commit went from {} to {index}", v.commit),
+                    );
+                    return;
+                }
+                if index > v.log.len() as u64 {
+                    self.violation(
+                        tick,
+                        r,
+                        "record",
+                        format!("commit {index} beyond a log of {} entries", v.log.len()),
+                    );
+                    return;
+                }
+                for i in v.commit + 1..=index {
+                    let e = v.log[i as usize - 1];
+                    let k = i as usize - 1;
+                    if k < self.committed.len() {
+                        if self.committed[k] != e {
+                            self.violation(
+                                tick,
+                                r,
+                                "state_machine_safety",
+                                format!(
+                                    "committed (term {}, digest {:08x}) at index {i}, another robot committed (term {}, digest {:08x})",
+                                    e.0, e.1, self.committed[k].0, self.committed[k].1
+                                ),
+                            );
+                        }
+                    } else if k == self.committed.len() {
+                        self.committed.push(e);
+                        self.committed_tick.push(tick);
+                    }
+                }
+                v.commit = index;
+            }
+            ConsensusNote::Apply {
+                index,
+                term,
+                digest,
+            } => {
+                if index != v.applied + 1 {
+                    self.violation(
+                        tick,
+                        r,
+                        "apply_order",
+                        format!("applied {index} after {}", v.applied),
+                    );
+                }
+                if index > v.commit {
+                    self.violation(
+                        tick,
+                        r,
+                        "state_machine_safety",
+                        format!("applied {index} beyond its commit {}", v.commit),
+                    );
+                }
+                if v.log.get(index as usize - 1) != Some(&(term, digest)) || index == 0 {
+                    self.violation(
+                        tick,
+                        r,
+                        "record",
+                        format!("applied ({index}, term {term}) not in its log"),
+                    );
+                }
+                match self.applied.get(&index) {
+                    Some(&(t, d)) if (t, d) != (term, digest) => self.violation(
+                        tick,
+                        r,
+                        "state_machine_safety",
+                        format!(
+                            "applied (term {term}, digest {digest:08x}) at index {index}, another robot applied (term {t}, digest {d:08x})"
+                        ),
+                    ),
+                    Some(_) => {}
+                    None => {
+                        self.applied.insert(index, (term, digest));
+                    }
+                }
+                self.applied_by.entry(index).or_default().insert(r);
+                v.applied = index;
+            }
+            ConsensusNote::Propose {
+                index,
+                term,
+                id,
+                decision,
+            } => {
+                if v.role != Role::Leader || v.term != term {
+                    self.violation(
+                        tick,
+                        r,
+                        "record",
+                        format!("proposed in term {term} as {:?} of term {}", v.role, v.term),
+                    );
+                }
+                self.proposals.insert(
+                    (index, term),
+                    Proposal {
+                        tick,
+                        robot: r,
+                        id,
+                        decision,
+                    },
+                );
+            }
+            ConsensusNote::Sent(c) => v.sent = c,
+            ConsensusNote::Quadrant { leader, score, .. } => v.quadrant = Some((leader, score)),
+        }
+    }
+
+    fn new_leader(&mut self, tick: u64, r: u32, term: u64) {
+        if self.current_leader.is_some_and(|(_, t)| t > term) {
+            // A stale leader of an older term (e.g. a partitioned minority) does not replace
+            // the current one.
+            return;
+        }
+        self.first_leader_tick.get_or_insert(tick);
+        if let Some(since) = self.leaderless_since.take() {
+            self.reelection_ticks.push(tick - since);
+        }
+        if self.last_leader.is_some_and(|l| l != r) {
+            self.leader_changes += 1;
+        }
+        self.last_leader = Some(r);
+        self.current_leader = Some((r, term));
+    }
+
+    /// End of `tick`: leader completeness for every robot that leads now.
+    pub fn end_tick(&mut self, tick: u64) {
+        self.last_tick = self.last_tick.max(tick);
+        let mut found = Vec::new();
+        for (&r, v) in self.robots.iter_mut() {
+            if !v.alive || v.role != Role::Leader {
+                continue;
+            }
+            while (v.completeness_checked as usize) < self.committed.len() {
+                let i = v.completeness_checked as usize;
+                let (t, d) = self.committed[i];
+                if t > v.term {
+                    // Committed by a later leader: not this one's business (and log terms
+                    // never decrease, so neither are the entries after it).
+                    break;
+                }
+                if v.log.get(i) != Some(&(t, d)) {
+                    found.push((
+                        r,
+                        format!(
+                            "leader of term {} lacks committed entry {} (term {t})",
+                            v.term,
+                            i + 1
+                        ),
+                    ));
+                    break;
+                }
+                v.completeness_checked += 1;
+            }
+        }
+        for (r, detail) in found {
+            self.violation(tick, r, "leader_completeness", detail);
+        }
+    }
+
+    /// Reads `events.jsonl` text and checks it tick by tick.
+    pub fn from_events(text: &str) -> Result<Checker, String> {
+        let mut c = Checker::new();
+        let mut tick: Option<u64> = None;
+        for (n, line) in text.lines().enumerate() {
+            if line.trim().is_empty() {
+                continue;
+            }
+            let v: Value = serde_json::from_str(line)
+                .map_err(|e| format!("events.jsonl line {}: {e}", n + 1))?;
+            let t = v["tick"].as_u64().unwrap_or(0);
+            if let Some(prev) = tick
+                && t > prev
+            {
+                c.end_tick(prev);
+            }
+            tick = Some(tick.map_or(t, |p| p.max(t)));
+            let robot = v["robot"].as_u64().unwrap_or(0) as u32;
+            match v["event"].as_str() {
+                Some("note") => {
+                    let note: Note = serde_json::from_value(v["note"].clone())
+                        .map_err(|e| format!("events.jsonl line {}: note: {e}", n + 1))?;
+                    if let Note::Consensus(cn) = note {
+                        c.note(t, robot, &cn);
+                    }
+                }
+                Some("died") => c.died(t, robot),
+                _ => {}
+            }
+        }
+        if let Some(t) = tick {
+            c.end_tick(t);
+        }
+        Ok(c)
+    }
+
+    /// The consensus metrics (see [`consensus_metrics`]).
+    pub fn metrics(&self) -> Value {
+        let mut sent = SentCounts::default();
+        for v in self.robots.values() {
+            add_counts(&mut sent, &v.sent_before);
+            add_counts(&mut sent, &v.sent);
+        }
+        let sent: serde_json::Map<String, Value> = sent
+            .pairs()
+            .into_iter()
+            .filter(|&(_, n)| n > 0)
+            .map(|(k, n)| (k.to_string(), json!(n)))
+            .collect();
+        let decisions: Vec<Value> = self
+            .proposals
+            .iter()
+            .map(|(&(index, term), p)| {
+                let committed = self
+                    .committed
+                    .get(index as usize - 1)
+                    .is_some_and(|&(t, _)| t == term);
+                json!({
+                    "id": p.id,
+                    "decision": p.decision,
+                    "index": index,
+                    "term": term,
+                    "proposed_tick": p.tick,
+                    "proposer": p.robot,
+                    "committed_tick": if committed { json!(self.committed_tick[index as usize - 1]) } else { Value::Null },
+                    "applied_by": if committed { self.applied_by.get(&index).map_or(0, |s| s.len()) } else { 0 },
+                })
+            })
+            .collect();
+        let terms = self.robots.values().map(|v| v.term).max().unwrap_or(0);
+        let mut m = json!({
+            "first_leader_tick": self.first_leader_tick,
+            "leader": self.current_leader.map(|(r, t)| json!({"robot": r, "term": t})),
+            "leader_changes": self.leader_changes,
+            "reelection_ticks": self.reelection_ticks,
+            "terms": terms,
+            "committed": self.committed.len(),
+            "applied_min_live": self.robots.values().filter(|v| v.alive).map(|v| v.applied).min(),
+            "decisions": decisions,
+            "safety_violations": self.violations.len(),
+            "violations": self.violations.iter().take(10).map(|v| v.to_string()).collect::<Vec<_>>(),
+            "amnesia_restarts": self.amnesia,
+            "sent": sent,
+            "notes": self.notes,
+        });
+        let beliefs: BTreeMap<u32, (u32, u8)> = self
+            .robots
+            .iter()
+            .filter_map(|(&r, v)| v.quadrant.map(|q| (r, q)))
+            .collect();
+        if !beliefs.is_empty() {
+            let leaders: Vec<u32> = beliefs
+                .iter()
+                .filter(|&(&r, &(l, _))| r == l)
+                .map(|(&r, _)| r)
+                .collect();
+            let first = beliefs.values().next().map(|b| b.0);
+            m["quadrant"] = json!({
+                "self_declared_leaders": leaders,
+                "all_agree": beliefs.values().all(|b| Some(b.0) == first),
+                "beliefs": beliefs.iter().map(|(&r, &(l, s))| json!({"robot": r, "leader": l, "score": s})).collect::<Vec<_>>(),
+            });
+        }
+        m
+    }
+}
+
+fn add_counts(into: &mut SentCounts, c: &SentCounts) {
+    into.pre_vote += c.pre_vote;
+    into.pre_vote_resp += c.pre_vote_resp;
+    into.vote += c.vote;
+    into.vote_resp += c.vote_resp;
+    into.append += c.append;
+    into.append_resp += c.append_resp;
+    into.quad_claim += c.quad_claim;
+    into.quad_leader += c.quad_leader;
+}
+
+/// The consensus metrics of a run from its `events.jsonl` text: `first_leader_tick`,
+/// `leader_changes`, `reelection_ticks` (from a leader's death or disappearance to the next
+/// leader), `terms` (highest term), `committed` (length of the committed log),
+/// `applied_min_live`, `decisions` (each proposal: when proposed, committed, by how many
+/// robots applied), `safety_violations` (must be 0) with the first few `violations`,
+/// `amnesia_restarts`, `sent` (consensus frames per kind, from the robots' cumulative `sent`
+/// notes; a robot's last `stats_every` ticks before the end or its death are not counted)
+/// and, for the quadrant leader choice, `quadrant`.
+pub fn consensus_metrics(events: &str) -> Value {
+    match Checker::from_events(events) {
+        Ok(c) => c.metrics(),
+        Err(e) => json!({ "error": e }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ConsensusNote as N;
+
+    fn state(term: u64, role: Role, vote: Option<u32>) -> N {
+        N::State { term, role, vote }
+    }
+
+    fn app(index: u64, term: u64, digest: u32) -> N {
+        N::Append {
+            index,
+            term,
+            digest,
+        }
+    }
+
+    /// Feeds (tick, robot, note) triples, ending each tick; returns the violated properties.
+    fn run(stream: &[(u64, u32, N)]) -> Vec<&'static str> {
+        let mut c = Checker::new();
+        let mut last = None;
+        for (t, r, n) in stream {
+            if let Some(p) = last
+                && *t > p
+            {
+                c.end_tick(p);
+            }
+            last = Some(*t);
+            c.note(*t, *r, n);
+        }
+        if let Some(p) = last {
+            c.end_tick(p);
+        }
+        c.violations().iter().map(|v| v.property).collect()
+    }
+
+    /// A healthy history: robot 0 leads term 1, replicates and commits two entries on 1 and 2.
+    fn healthy() -> Vec<(u64, u32, N)> {
+        let mut s = vec![
+            (1, 0, state(1, Role::Candidate, Some(0))),
+            (1, 1, state(1, Role::Follower, Some(0))),
+            (1, 2, state(1, Role::Follower, Some(0))),
+            (2, 0, state(1, Role::Leader, Some(0))),
+            (2, 0, app(1, 1, 0xa)),
+            (2, 0, app(2, 1, 0xb)),
+        ];
+        for r in [1, 2] {
+            s.push((3, r, app(1, 1, 0xa)));
+            s.push((3, r, app(2, 1, 0xb)));
+        }
+        s.push((4, 0, N::Commit { index: 2 }));
+        for r in [0, 1, 2] {
+            if r != 0 {
+                s.push((5, r, N::Commit { index: 2 }));
+            }
+            s.push((
+                5,
+                r,
+                N::Apply {
+                    index: 1,
+                    term: 1,
+                    digest: 0xa,
+                },
+            ));
+            s.push((
+                5,
+                r,
+                N::Apply {
+                    index: 2,
+                    term: 1,
+                    digest: 0xb,
+                },
+            ));
+        }
+        s
+    }
+
+    #[test]
+    fn a_healthy_history_passes() {
+        assert_eq!(run(&healthy()), Vec::<&str>::new());
+    }
+
+    #[test]
+    fn two_leaders_in_one_term_break_election_safety() {
+        let s = vec![
+            (1, 0, state(1, Role::Leader, Some(0))),
+            (2, 1, state(1, Role::Leader, Some(1))),
+        ];
+        assert_eq!(run(&s), vec!["election_safety"]);
+        // Leaders of different terms at once are fine (a stale leader in a minority).
+        let s = vec![
+            (1, 0, state(1, Role::Leader, Some(0))),
+            (2, 1, state(2, Role::Leader, Some(1))),
+        ];
+        assert_eq!(run(&s), Vec::<&str>::new());
+        // A leader that did not vote for itself is just as wrong.
+        let s = vec![(1, 0, state(2, Role::Leader, Some(1)))];
+        assert_eq!(run(&s), vec!["election_safety"]);
+    }
+
+    #[test]
+    fn same_index_and_term_with_different_prefixes_break_log_matching() {
+        // Entry (2, term 2) is the same on both robots, but what precedes it is not.
+        let s = vec![
+            (1, 0, app(1, 1, 0xa)),
+            (1, 0, app(2, 2, 0xc)),
+            (1, 1, app(1, 3, 0xf)),
+            (1, 1, app(2, 2, 0xc)),
+        ];
+        assert_eq!(run(&s), vec!["log_matching"]);
+        // The same (index, term) with different contents, too.
+        let s = vec![(1, 0, app(1, 1, 0xa)), (1, 1, app(1, 1, 0xb))];
+        assert_eq!(run(&s), vec!["log_matching"]);
+    }
+
+    #[test]
+    fn a_leader_missing_a_committed_entry_breaks_leader_completeness() {
+        let mut s = healthy();
+        // Robot 3 never got the entries but leads term 2.
+        s.push((6, 3, state(2, Role::Candidate, Some(3))));
+        s.push((7, 3, state(2, Role::Leader, Some(3))));
+        assert_eq!(run(&s), vec!["leader_completeness"]);
+        // Truncating a committed entry is the same fault seen from a follower.
+        let mut s = healthy();
+        s.push((6, 1, N::Truncate { index: 2 }));
+        assert_eq!(run(&s), vec!["leader_completeness"]);
+    }
+
+    #[test]
+    fn different_entries_committed_or_applied_at_one_index_break_state_machine_safety() {
+        // Robot 3 has its own entry 1 (another term) and commits it.
+        let mut s = healthy();
+        s.push((6, 3, app(1, 2, 0xe)));
+        s.push((6, 3, N::Commit { index: 1 }));
+        let v = run(&s);
+        assert!(v.contains(&"state_machine_safety"), "{v:?}");
+        // Applying beyond the commit index.
+        let s = vec![
+            (1, 0, app(1, 1, 0xa)),
+            (
+                1,
+                0,
+                N::Apply {
+                    index: 1,
+                    term: 1,
+                    digest: 0xa,
+                },
+            ),
+        ];
+        assert_eq!(run(&s), vec!["state_machine_safety"]);
+    }
+
+    #[test]
+    fn going_back_breaks_monotonicity() {
+        let s = vec![
+            (1, 0, state(3, Role::Follower, None)),
+            (2, 0, state(2, Role::Follower, None)),
+        ];
+        assert_eq!(run(&s), vec!["monotonic_term"]);
+        let s = vec![
+            (1, 0, state(3, Role::Follower, Some(1))),
+            (2, 0, state(3, Role::Follower, Some(2))),
+        ];
+        assert_eq!(run(&s), vec!["monotonic_vote"]);
+        let mut s = healthy();
+        s.push((6, 1, N::Commit { index: 1 }));
+        assert_eq!(run(&s), vec!["monotonic_commit"]);
+        let mut s = healthy();
+        s.push((
+            6,
+            1,
+            N::Apply {
+                index: 1,
+                term: 1,
+                digest: 0xa,
+            },
+        ));
+        assert_eq!(run(&s), vec!["apply_order"]);
+    }
+
+    #[test]
+    fn a_self_contradicting_record_is_reported() {
+        let s = vec![(1, 0, app(3, 1, 0xa))];
+        assert_eq!(run(&s), vec!["record"]);
+    }
+
+    #[test]
+    fn restarts_with_state_carry_on_and_amnesia_is_counted() {
+        let mut c = Checker::new();
+        for (t, r, n) in healthy() {
+            c.note(t, r, &n);
+        }
+        c.died(6, 0);
+        assert_eq!(c.current_leader(), None);
+        // Robot 0 comes back with its state and re-applies: fine.
+        c.note(
+            20,
+            0,
+            &N::Boot {
+                term: 1,
+                vote: Some(0),
+                last_index: 2,
+                commit: 2,
+            },
+        );
+        c.note(
+            20,
+            0,
+            &N::Apply {
+                index: 1,
+                term: 1,
+                digest: 0xa,
+            },
+        );
+        c.end_tick(20);
+        assert_eq!(c.violations(), &[]);
+        assert_eq!(c.amnesia_restarts(), 0);
+        // Robot 1 comes back with nothing: amnesia, not by itself a violation.
+        c.note(
+            21,
+            1,
+            &N::Boot {
+                term: 0,
+                vote: None,
+                last_index: 0,
+                commit: 0,
+            },
+        );
+        assert_eq!(c.amnesia_restarts(), 1);
+        assert_eq!(c.violations(), &[]);
+    }
+
+    #[test]
+    fn metrics_follow_leaders_deaths_and_reelections() {
+        let mut lines = String::new();
+        let push = |lines: &mut String, t: u64, r: u32, n: N| {
+            lines.push_str(
+                &serde_json::to_string(&json!({
+                    "event": "note", "tick": t, "robot": r, "note": Note::Consensus(n)
+                }))
+                .unwrap(),
+            );
+            lines.push('\n');
+        };
+        push(&mut lines, 10, 0, state(1, Role::Leader, Some(0)));
+        push(&mut lines, 10, 0, app(1, 1, 0xa));
+        push(&mut lines, 11, 0, N::Commit { index: 1 });
+        push(
+            &mut lines,
+            11,
+            0,
+            N::Sent(SentCounts {
+                append: 4,
+                ..SentCounts::default()
+            }),
+        );
+        lines.push_str(r#"{"event":"died","tick":50,"robot":0,"reason":"killed"}"#);
+        lines.push('\n');
+        push(&mut lines, 12, 1, app(1, 1, 0xa));
+        push(&mut lines, 50, 1, state(2, Role::Candidate, Some(1)));
+        push(&mut lines, 71, 1, state(2, Role::Leader, Some(1)));
+        let m = consensus_metrics(&lines);
+        assert_eq!(m["first_leader_tick"], 10);
+        assert_eq!(m["leader_changes"], 1);
+        assert_eq!(m["reelection_ticks"], json!([21]));
+        assert_eq!(m["terms"], 2);
+        assert_eq!(m["committed"], 1);
+        assert_eq!(m["safety_violations"], 0);
+        assert_eq!(m["sent"]["append"], 4);
+        assert!(consensus_metrics("not json\n")["error"].is_string());
+    }
+}
