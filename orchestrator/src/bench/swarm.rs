@@ -105,10 +105,10 @@ pub struct InProcessRow {
     pub secs: f64,
     /// agents * ticks / secs.
     pub robot_steps_per_s: f64,
-    /// CPU seconds this thread spent stepping (less than `secs` when other processes
-    /// took the CPU: a shared machine).
+    /// CPU seconds this process spent stepping, all threads (`World::observe` uses several
+    /// from 256 robots; less than `secs` when other processes took the CPU).
     pub cpu_secs: f64,
-    /// agents * ticks / cpu_secs: what one otherwise idle core would do.
+    /// agents * ticks / cpu_secs: the work per CPU-second, whatever else ran.
     pub robot_steps_per_cpu_s: f64,
     /// Mean ms per tick in `World::observe`.
     pub observe_ms: f64,
@@ -431,20 +431,21 @@ fn floor_run(n: u32, ticks: u64, interrupt: &Interrupt, run_ids: &mut Vec<String
     row
 }
 
-/// CPU time of the calling thread, seconds.
-fn thread_cpu_secs() -> f64 {
+/// CPU time of this process (all its threads), seconds.
+fn process_cpu_secs() -> f64 {
     let mut ts = libc::timespec {
         tv_sec: 0,
         tv_nsec: 0,
     };
     // SAFETY: clock_gettime only writes the struct we pass.
     unsafe {
-        libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts);
+        libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts);
     }
     ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
 }
 
-/// The same cores in one thread, no IPC and no records: observe, every agent's step, step.
+/// The same cores in one process, no IPC and no records: observe (on several threads from
+/// 256 robots), every agent's step, step.
 fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRow> {
     let n = cfg.robots.count as usize;
     let t = Instant::now();
@@ -455,7 +456,7 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
     let mut commands = Vec::with_capacity(n);
     let (mut observe, mut think, mut step) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
     let start = Instant::now();
-    let cpu_start = thread_cpu_secs();
+    let cpu_start = process_cpu_secs();
     let mut ticks = 0u64;
     while ticks < cfg.scenario.ticks && start.elapsed() < IN_PROCESS_BUDGET {
         interrupt.check()?;
@@ -474,7 +475,7 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
         ticks += 1;
     }
     let secs = start.elapsed().as_secs_f64();
-    let cpu_secs = thread_cpu_secs() - cpu_start;
+    let cpu_secs = process_cpu_secs() - cpu_start;
     let per = |d: Duration| d.as_secs_f64() * 1e3 / ticks.max(1) as f64;
     Ok(InProcessRow {
         agents: n as u32,
@@ -589,7 +590,7 @@ pub fn table(r: &SwarmReport) -> String {
     }
     let _ = writeln!(
         s,
-        "\nin-process (same cores, one thread, no IPC, no records)"
+        "\nin-process (same cores, one process, no IPC, no records; observe on 2 threads from 256 robots)"
     );
     let _ = writeln!(
         s,
