@@ -106,7 +106,7 @@ pub struct InProcessRow {
     /// agents * ticks / secs.
     pub robot_steps_per_s: f64,
     /// CPU seconds this process spent stepping, all threads (`World::observe` uses several
-    /// from 256 robots; less than `secs` when other processes took the CPU).
+    /// from 64 robots; less than `secs` when other processes took the CPU).
     pub cpu_secs: f64,
     /// agents * ticks / cpu_secs: the work per CPU-second, whatever else ran.
     pub robot_steps_per_cpu_s: f64,
@@ -445,7 +445,7 @@ fn process_cpu_secs() -> f64 {
 }
 
 /// The same cores in one process, no IPC and no records: observe (on several threads from
-/// 256 robots), every agent's step, step.
+/// 64 robots), every agent's step, step.
 fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRow> {
     let n = cfg.robots.count as usize;
     let t = Instant::now();
@@ -590,7 +590,7 @@ pub fn table(r: &SwarmReport) -> String {
     }
     let _ = writeln!(
         s,
-        "\nin-process (same cores, one process, no IPC, no records; observe on 2 threads from 256 robots)"
+        "\nin-process (same cores, one process, no IPC, no records; observe split over the cores from 64 robots)"
     );
     let _ = writeln!(
         s,
