@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use super::child::{ChildMsg, ChildSpec, LossMode, Transport};
 use super::fanout::FanoutResult;
 use super::loss::{PubResult, SubResult};
-use super::plot::{Panel, Series, write_figure};
+use super::plot::{Legend, Panel, Series, write_figure};
 use super::procs::{Children, Memory, memory};
 use super::stats::{Summary, summarize};
 use super::transports::{MIN_PAYLOAD, PATH_REPLY, PATH_REQUEST, PingResult, crossbeam_pair};
@@ -715,18 +715,21 @@ fn plots(r: &IpcReport, dir: &Path) -> anyhow::Result<()> {
             x_desc: "payload (bytes)".into(),
             y_desc: "microseconds".into(),
             series: rtt,
+            legend: Legend::UpperLeft,
         },
         Panel {
             title: "one-way throughput".into(),
             x_desc: "payload (bytes)".into(),
             y_desc: "messages per second".into(),
             series: tput,
+            legend: Legend::LowerLeft,
         },
         Panel {
             title: "fan-out: one sample to K processes".into(),
             x_desc: "subscriber processes K".into(),
             y_desc: "microseconds".into(),
             series: fan,
+            legend: Legend::UpperLeft,
         },
     ];
     let title = format!(

@@ -31,6 +31,22 @@ pub struct Panel {
     pub y_desc: String,
     /// The lines.
     pub series: Vec<Series>,
+    /// Where the legend goes (where the lines are not).
+    pub legend: Legend,
+}
+
+/// Corner of a panel for its legend.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Legend {
+    /// Top left.
+    #[default]
+    UpperLeft,
+    /// Top right.
+    UpperRight,
+    /// Bottom left.
+    LowerLeft,
+    /// Bottom right.
+    LowerRight,
 }
 
 const PALETTE: [RGBColor; 8] = [
@@ -68,9 +84,20 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo / 1.4, hi * 1.4)
 }
 
-/// Short tick label for a log axis.
-fn label(v: f64) -> String {
+/// Short tick label for a log axis. With `sparse` (an axis spanning a decade or more) only
+/// 1, 2 and 5 times a power of ten are labelled (the others stay as grid lines), so labels
+/// never run into each other.
+fn label(v: f64, sparse: bool) -> String {
     let a = v.abs();
+    if sparse && a > 0.0 {
+        let mantissa = a / 10f64.powf(a.log10().floor());
+        if ![1.0, 2.0, 5.0, 10.0]
+            .iter()
+            .any(|m| (mantissa - m).abs() < 1e-6 * m)
+        {
+            return String::new();
+        }
+    }
     if a >= 1e9 {
         format!("{}G", trim(v / 1e9))
     } else if a >= 1e6 {
@@ -113,8 +140,8 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> a
         .configure_mesh()
         .x_desc(p.x_desc.as_str())
         .y_desc(p.y_desc.as_str())
-        .x_label_formatter(&|v| label(*v))
-        .y_label_formatter(&|v| label(*v))
+        .x_label_formatter(&|v| label(*v, xr.1 / xr.0 >= 10.0))
+        .y_label_formatter(&|v| label(*v, yr.1 / yr.0 >= 10.0))
         .label_style(("sans-serif", 13.0))
         .axis_desc_style(("sans-serif", 14.0))
         .bold_line_style(BLACK.mix(0.08))
@@ -148,7 +175,12 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> a
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.3))
         .label_font(("sans-serif", 12.0))
-        .position(SeriesLabelPosition::UpperLeft)
+        .position(match p.legend {
+            Legend::UpperLeft => SeriesLabelPosition::UpperLeft,
+            Legend::UpperRight => SeriesLabelPosition::UpperRight,
+            Legend::LowerLeft => SeriesLabelPosition::LowerLeft,
+            Legend::LowerRight => SeriesLabelPosition::LowerRight,
+        })
         .draw()
         .map_err(draw_err("legend"))?;
     Ok(())
@@ -225,12 +257,14 @@ mod tests {
                         dashed: true,
                     },
                 ],
+                legend: Legend::UpperLeft,
             },
             Panel {
                 title: "empty".into(),
                 x_desc: "x".into(),
                 y_desc: "y".into(),
                 series: vec![],
+                legend: Legend::LowerRight,
             },
             Panel {
                 title: "single point".into(),
@@ -242,6 +276,7 @@ mod tests {
                     colour: 9,
                     dashed: false,
                 }],
+                legend: Legend::UpperRight,
             },
         ];
         write_figure(dir.path(), "fig", "test figure", &panels).unwrap();
@@ -249,7 +284,10 @@ mod tests {
         assert!(svg.contains("test figure") && svg.contains("single point"));
         let png = std::fs::read(dir.path().join("fig.png")).unwrap();
         assert_eq!(&png[1..4], b"PNG");
-        assert_eq!(label(1_500_000.0), "1.5M");
-        assert_eq!(label(64.0), "64");
+        assert_eq!(label(1_500_000.0, false), "1.5M");
+        assert_eq!(label(1_500_000.0, true), "");
+        assert_eq!(label(50.0, true), "50");
+        assert_eq!(label(70.0, true), "");
+        assert_eq!(label(2e3, true), "2k");
     }
 }

@@ -21,7 +21,7 @@ use swarmrt_world::World;
 
 use super::child::{ChildMsg, ChildSpec};
 use super::floor::{FloorResult, SAMPLE_TICK};
-use super::plot::{Panel, Series, write_figure};
+use super::plot::{Legend, Panel, Series, write_figure};
 use super::procs::{Children, Memory, memory, my_children, open_fds};
 use super::{
     BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_rate, machine, make_out_dir,
@@ -677,6 +677,7 @@ fn plots(r: &SwarmReport, dir: &Path) -> anyhow::Result<()> {
                         .collect(),
                 ),
             ],
+            legend: Legend::UpperRight,
         },
         Panel {
             title: "tick latency".into(),
@@ -720,6 +721,7 @@ fn plots(r: &SwarmReport, dir: &Path) -> anyhow::Result<()> {
                         .collect(),
                 ),
             ],
+            legend: Legend::UpperLeft,
         },
         Panel {
             title: "start-up until every robot is ready".into(),
@@ -745,6 +747,7 @@ fn plots(r: &SwarmReport, dir: &Path) -> anyhow::Result<()> {
                         .collect(),
                 ),
             ],
+            legend: Legend::UpperLeft,
         },
         Panel {
             title: "memory of all processes".into(),
@@ -788,6 +791,7 @@ fn plots(r: &SwarmReport, dir: &Path) -> anyhow::Result<()> {
                         .collect(),
                 ),
             ],
+            legend: Legend::UpperLeft,
         },
     ];
     let title = format!(
