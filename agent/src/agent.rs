@@ -51,6 +51,12 @@ impl Agent {
         Self::with_consensus(cfg, id, Consensus::new(cfg, id))
     }
 
+    /// Robot `id` in a fresh process after `incarnation` scheduled restarts: no memory at
+    /// all; its consensus timeouts come from a new random stream, as a rebooted robot's would.
+    pub fn fresh(cfg: &Config, id: u32, incarnation: u32) -> Agent {
+        Self::with_consensus(cfg, id, Consensus::fresh(cfg, id, incarnation))
+    }
+
     /// Robot `id` restarting after a crash: a fresh behaviour, and a consensus layer that
     /// kept its persistent Raft state (term, vote, commit, log) and re-applies the committed
     /// decisions. `incarnation` counts the restarts.

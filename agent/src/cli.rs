@@ -17,6 +17,9 @@ struct Args {
     /// The resolved config of the run.
     #[arg(long)]
     config: std::path::PathBuf,
+    /// How many times the fault schedule restarted this robot before this process.
+    #[arg(long, default_value_t = 0)]
+    incarnation: u32,
 }
 
 /// Entry point of the process (the `swarm-agent` binary in the orchestrator package).
@@ -36,7 +39,7 @@ pub fn main() -> std::process::ExitCode {
         tracing::error!(robots = cfg.robots.count, "robot id out of range");
         return std::process::ExitCode::from(2);
     }
-    match shell::run(&run, &cfg, args.robot) {
+    match shell::run(&run, &cfg, args.robot, args.incarnation) {
         // Exit code 0 means exactly "the world ended the run", so the orchestrator can tell a
         // clean end from a robot that vanished mid-run.
         Ok(shell::Exit::Shutdown) => std::process::ExitCode::SUCCESS,

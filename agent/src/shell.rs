@@ -8,7 +8,7 @@ use iceoryx2::prelude::*;
 use swarmrt_protocol::config::Config;
 use swarmrt_protocol::ipc::{self, IpcError};
 use swarmrt_protocol::services::{EVENT_COMMAND, RunServices};
-use swarmrt_protocol::{Command, PROTOCOL_VERSION};
+use swarmrt_protocol::{Command, PROTOCOL_VERSION, RobotState};
 
 use crate::Agent;
 
@@ -58,7 +58,8 @@ pub enum Exit {
 }
 
 /// Runs robot `id` of run `run` until the world shuts down or the process is told to stop.
-pub fn run(run: &RunServices, cfg: &Config, id: u32) -> Result<Exit, IpcError> {
+/// `incarnation` is 0 for the first process of the robot and counts scheduled restarts.
+pub fn run(run: &RunServices, cfg: &Config, id: u32, incarnation: u32) -> Result<Exit, IpcError> {
     let node = ipc::node(run, &run.robot_node_name(id))?;
     let services = ipc::open_services(&node, run)?;
     let subscriber = services.observations.subscriber_builder().create()?;
@@ -70,7 +71,7 @@ pub fn run(run: &RunServices, cfg: &Config, id: u32) -> Result<Exit, IpcError> {
         .default_event_id(EventId::new(EVENT_COMMAND))
         .create()?;
 
-    let mut agent = Agent::new(cfg, id);
+    let mut agent = Agent::fresh(cfg, id, incarnation);
     let misbehave = misbehave_for(id);
     if let Some(m) = misbehave {
         tracing::warn!(?m, "test hook: this robot sends malformed commands");
@@ -96,6 +97,11 @@ pub fn run(run: &RunServices, cfg: &Config, id: u32) -> Result<Exit, IpcError> {
             let Some(obs) = sample.payload().get(id as usize) else {
                 return Err(format!("observation sample has no slot for robot {id}").into());
             };
+            // Ticks in which this robot is frozen or restarting (a thawed or fresh process
+            // may find one still queued) expect no answer.
+            if !RobotState::from_u8(obs.state).is_some_and(RobotState::expects_command) {
+                continue;
+            }
             let mut cmd = agent.step(obs);
             drop(sample);
             match misbehave {
@@ -113,8 +119,9 @@ pub fn run(run: &RunServices, cfg: &Config, id: u32) -> Result<Exit, IpcError> {
         }
         match listener.timed_wait(|_| {}, IDLE_CHECK) {
             Ok(_) => {}
-            // SIGTERM/SIGINT interrupt the wait: a request to stop, not a failure.
-            Err(ListenerWaitError::InterruptSignal) => return Ok(Exit::Terminated),
+            // A signal interrupted the wait: SIGTERM/SIGINT (checked below) or the SIGCONT
+            // ending a freeze, after which Linux fails the wait with EINTR.
+            Err(ListenerWaitError::InterruptSignal) => {}
             Err(e) => return Err(e.into()),
         }
         if node.wait(Duration::ZERO).is_err() {

@@ -551,6 +551,9 @@ impl Checker {
                     }
                 }
                 Some("died") => c.died(t, robot),
+                // A restarted robot's old process is gone from that tick; its fresh process
+                // announces itself with a Boot note when it rejoins.
+                Some("fault") if v["fault"] == "restart" => c.died(t, robot),
                 _ => {}
             }
         }

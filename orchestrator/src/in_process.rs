@@ -4,10 +4,10 @@
 use std::path::Path;
 
 use swarmrt_agent::Agent;
-use swarmrt_protocol::Observation;
 use swarmrt_protocol::config::Config;
+use swarmrt_protocol::{Observation, RobotState};
 use swarmrt_world::records::Recorder;
-use swarmrt_world::{World, WorldMetrics};
+use swarmrt_world::{ProcessSignal, World, WorldMetrics};
 
 /// Runs the scenario to the end (or until `interrupt` fires, checked every tick), recording
 /// into `dir`; `progress` gets each completed tick. Returns the metrics and whether it was
@@ -31,13 +31,23 @@ pub fn run(
             interrupted = true;
             break;
         }
-        // A scheduled kill only marks the robot dead here: there is no process to signal.
-        world.take_kills();
+        // Kills and freezes only change the world's state here: there is no process to
+        // signal. A restart starts the robot's brain afresh, as a new process would.
+        for signal in world.take_signals() {
+            if let ProcessSignal::Restart { robot, incarnation } = signal {
+                agents[robot as usize] = Agent::fresh(cfg, robot, incarnation);
+            }
+        }
         world.observe(&mut obs);
+        // Only robots whose process would run answer, as in the process shells.
         let commands: Vec<_> = agents
             .iter_mut()
             .zip(&obs)
-            .map(|(a, o)| Some(a.step(o)))
+            .map(|(a, o)| {
+                RobotState::from_u8(o.state)
+                    .is_some_and(RobotState::expects_command)
+                    .then(|| a.step(o))
+            })
             .collect();
         world.step(&commands);
         let events = world.drain_events();

@@ -550,7 +550,9 @@ fn draw_figure<DB: DrawingBackend>(
         area.draw(&Circle::new(start, body_r, colour.stroke_width(line_w)))
             .map_err(draw_err("start marker"))?;
         let end_marker = match tracks[i].final_state {
-            RobotState::Active => area.draw(&Circle::new(end, dot_r, colour.filled())),
+            RobotState::Active | RobotState::Frozen | RobotState::Restarting => {
+                area.draw(&Circle::new(end, dot_r, colour.filled()))
+            }
             RobotState::Down | RobotState::Dead => {
                 let style = CROSS.stroke_width(2);
                 area.draw(

@@ -45,6 +45,23 @@ pub struct ProcessOutcome {
     pub startup_ms: Option<u64>,
     /// The run id naming the run's iceoryx2 resources.
     pub run_id: String,
+    /// Every robot process started, in start order, with how it ended.
+    pub processes: Vec<RobotProcess>,
+}
+
+/// One robot process of a run (`metrics.json` → `processes`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RobotProcess {
+    /// The robot it ran.
+    pub robot: u32,
+    /// 0 for the robot's first process, then one more per scheduled restart.
+    pub incarnation: u32,
+    /// Its pid.
+    pub pid: i32,
+    /// How it ended ("exited with code 0" after the world's shutdown sample).
+    pub end: String,
+    /// True when the fault schedule killed it (a kill or a restart).
+    pub scheduled_kill: bool,
 }
 
 enum Msg {
@@ -143,6 +160,18 @@ fn spawn_reaper(tx: Sender<Msg>, spawned: Receiver<()>) {
     });
 }
 
+/// The process currently running `robot`: after a restart the old one may not be reaped yet.
+fn live_pid(
+    robots: &BTreeMap<i32, u32>,
+    scheduled_kills: &BTreeSet<i32>,
+    robot: u32,
+) -> Option<i32> {
+    robots
+        .iter()
+        .find(|(pid, id)| **id == robot && !scheduled_kills.contains(pid))
+        .map(|(&pid, _)| pid)
+}
+
 fn send_control(stdin: &mut Option<ChildStdin>, c: &Control) {
     if let Some(s) = stdin.as_mut()
         && s.write_all(c.to_line().as_bytes())
@@ -155,6 +184,7 @@ fn send_control(stdin: &mut Option<ChildStdin>, c: &Control) {
 
 fn signal_all(pids: &[i32], sig: i32) {
     for &p in pids {
+        // SAFETY: kill(2) on pids we spawned and have not reaped (so not reused).
         unsafe {
             libc::kill(p, sig);
         }
@@ -196,14 +226,25 @@ fn supervise(
     let (tx, rx) = crossbeam_channel::unbounded::<Msg>();
 
     let interrupted_flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    // Dropped when this function returns: the relay thread ends with the run, so it never
+    // swallows a Ctrl-C meant for a later run in the same process.
+    let (_run_over, run_over) = crossbeam_channel::bounded::<()>(0);
     {
         let tx = tx.clone();
         let flag = interrupted_flag.clone();
         std::thread::spawn(move || {
-            while interrupt.recv().is_ok() {
-                flag.store(true, std::sync::atomic::Ordering::SeqCst);
-                if tx.send(Msg::Interrupt).is_err() {
-                    return;
+            loop {
+                crossbeam_channel::select! {
+                    recv(interrupt) -> r => {
+                        if r.is_err() {
+                            return;
+                        }
+                        flag.store(true, std::sync::atomic::Ordering::SeqCst);
+                        if tx.send(Msg::Interrupt).is_err() {
+                            return;
+                        }
+                    }
+                    recv(run_over) -> _ => return,
                 }
             }
         });
@@ -263,26 +304,34 @@ fn supervise(
             }
         }
     }
-    let mut robots: BTreeMap<i32, u32> = BTreeMap::new();
-    for id in 0..n {
-        if interrupted_flag.load(std::sync::atomic::Ordering::SeqCst) {
-            // Ctrl-C during start-up: start no more robots; the main loop stops the world.
-            break;
-        }
-        let child = child_command(&agent_bin)
+    let spawn_robot = |id: u32, incarnation: u32| {
+        child_command(&agent_bin)
             .args([
                 "--run-id",
                 run.run_id(),
                 "--robot",
                 &id.to_string(),
+                "--incarnation",
+                &incarnation.to_string(),
                 "--config",
             ])
             .arg(config_path)
             .stdin(Stdio::null())
-            .spawn();
-        match child {
+            .spawn()
+    };
+    let mut robots: BTreeMap<i32, u32> = BTreeMap::new();
+    // (pid, robot, incarnation) of every robot process, and how each ended.
+    let mut started: Vec<(i32, u32, u32)> = Vec::new();
+    let mut ended: BTreeMap<i32, String> = BTreeMap::new();
+    for id in 0..n {
+        if interrupted_flag.load(std::sync::atomic::Ordering::SeqCst) {
+            // Ctrl-C during start-up: start no more robots; the main loop stops the world.
+            break;
+        }
+        match spawn_robot(id, 0) {
             Ok(c) => {
                 robots.insert(c.id() as i32, id);
+                started.push((c.id() as i32, id, 0));
                 let _ = spawned_tx.send(());
             }
             Err(e) => {
@@ -308,7 +357,10 @@ fn supervise(
     let mut world_eof = false;
     let mut world_exit: Option<String> = None;
     let mut interrupts = 0;
+    // Processes the fault schedule killed (for a kill or a restart): their end is no death.
     let mut scheduled_kills: BTreeSet<i32> = BTreeSet::new();
+    // Processes the fault schedule stopped; they get SIGCONT before any shutdown.
+    let mut frozen: BTreeSet<i32> = BTreeSet::new();
     while !done {
         match rx.recv()? {
             Msg::Report(Report::Ready { startup_ms }) => outcome.startup_ms = Some(startup_ms),
@@ -316,10 +368,59 @@ fn supervise(
             Msg::Report(Report::Kill { robot }) => {
                 // A scheduled kill: the world counts the robot dead already; the real signal
                 // exercises the crash path.
-                if let Some((&pid, _)) = robots.iter().find(|(_, id)| **id == robot) {
+                if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
                     scheduled_kills.insert(pid);
-                    // SAFETY: kill(2) with a pid we spawned and have not reaped yet.
-                    unsafe { libc::kill(pid, libc::SIGKILL) };
+                    frozen.remove(&pid);
+                    signal_all(&[pid], libc::SIGKILL);
+                }
+            }
+            Msg::Report(Report::Freeze { robot }) => {
+                if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
+                    frozen.insert(pid);
+                    signal_all(&[pid], libc::SIGSTOP);
+                }
+            }
+            Msg::Report(Report::Thaw { robot }) => {
+                if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
+                    frozen.remove(&pid);
+                    signal_all(&[pid], libc::SIGCONT);
+                }
+            }
+            Msg::Report(Report::Restart { robot, incarnation }) => {
+                // The world waits for the fresh process's hello before the robot rejoins, so
+                // how long this takes changes nothing in the records.
+                if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
+                    scheduled_kills.insert(pid);
+                    frozen.remove(&pid);
+                    signal_all(&[pid], libc::SIGKILL);
+                }
+                match spawn_robot(robot, incarnation) {
+                    Ok(c) => {
+                        robots.insert(c.id() as i32, robot);
+                        started.push((c.id() as i32, robot, incarnation));
+                        let _ = spawned_tx.send(());
+                    }
+                    Err(e) => {
+                        tracing::error!(robot, "cannot restart robot: {e}");
+                        outcome
+                            .unscheduled_deaths
+                            .insert(robot, format!("failed to restart: {e}"));
+                        send_control(
+                            &mut world_stdin,
+                            &Control::RobotDied {
+                                robot,
+                                reason: "failed to restart".to_string(),
+                            },
+                        );
+                    }
+                }
+            }
+            Msg::Report(Report::Unresponsive { robot, waited_ms }) => {
+                // Unscheduled: recorded as a death when the reaper reports the exit.
+                if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
+                    tracing::warn!(robot, waited_ms, "robot unresponsive; killing it");
+                    frozen.remove(&pid);
+                    signal_all(&[pid], libc::SIGKILL);
                 }
             }
             Msg::Report(Report::Done {
@@ -337,19 +438,27 @@ fn supervise(
                     world_alive = false;
                     world_exit = Some(how);
                 } else if let Some(id) = robots.remove(&pid) {
-                    // Code 0 is a robot that saw the world's shutdown sample before we saw
-                    // the world's Done report: a clean end, not a death.
-                    if how != CLEAN_EXIT && !scheduled_kills.contains(&pid) {
-                        tracing::warn!(robot = id, "robot process {how}");
-                        outcome.unscheduled_deaths.insert(id, how.clone());
+                    frozen.remove(&pid);
+                    ended.insert(pid, how.clone());
+                    if scheduled_kills.contains(&pid) {
+                        // The world accounted for this fault at its tick; it only reclaims
+                        // the old process's ports (a restarted robot lives on).
+                        send_control(&mut world_stdin, &Control::Reaped { robot: id });
+                    } else {
+                        // Code 0 is a robot that saw the world's shutdown sample before we
+                        // saw the world's Done report: a clean end, not a death.
+                        if how != CLEAN_EXIT {
+                            tracing::warn!(robot = id, "robot process {how}");
+                            outcome.unscheduled_deaths.insert(id, how.clone());
+                        }
+                        send_control(
+                            &mut world_stdin,
+                            &Control::RobotDied {
+                                robot: id,
+                                reason: format!("process {how}"),
+                            },
+                        );
                     }
-                    send_control(
-                        &mut world_stdin,
-                        &Control::RobotDied {
-                            robot: id,
-                            reason: format!("process {how}"),
-                        },
-                    );
                 }
             }
             Msg::Interrupt => {
@@ -362,6 +471,7 @@ fn supervise(
                     let mut all: Vec<i32> = robots.keys().copied().collect();
                     all.push(world_pid);
                     signal_all(&all, libc::SIGKILL);
+                    frozen.clear();
                 }
             }
         }
@@ -374,6 +484,8 @@ fn supervise(
         }
     }
     drop(world_stdin);
+    // A stopped process can neither see the shutdown sample nor act on SIGTERM.
+    signal_all(&frozen.iter().copied().collect::<Vec<_>>(), libc::SIGCONT);
 
     // The world told robots to exit (or died): give them a moment to go by themselves, then
     // SIGTERM, then SIGKILL.
@@ -386,17 +498,30 @@ fn supervise(
     } else {
         Duration::ZERO
     };
-    wait_for_exit(&rx, &remaining, &mut robots, grace);
+    wait_for_exit(&rx, &remaining, &mut ended, grace);
     drop(spawned_tx);
+    outcome.processes = started
+        .into_iter()
+        .map(|(pid, robot, incarnation)| RobotProcess {
+            robot,
+            incarnation,
+            pid,
+            end: ended
+                .remove(&pid)
+                .unwrap_or_else(|| "not reaped".to_string()),
+            scheduled_kill: scheduled_kills.contains(&pid),
+        })
+        .collect();
     Ok(outcome)
 }
 
-/// Waits until every pid in `pids` has been reaped: after `grace` the rest get SIGTERM, after
-/// a further [`EXIT_GRACE`] SIGKILL. Ctrl-C while waiting kills at once.
+/// Waits until every pid in `pids` has been reaped, noting how each ended in `ended`: after
+/// `grace` the rest get SIGTERM, after a further [`EXIT_GRACE`] SIGKILL. Ctrl-C while waiting
+/// kills at once.
 fn wait_for_exit(
     rx: &Receiver<Msg>,
     pids: &[i32],
-    robots: &mut BTreeMap<i32, u32>,
+    ended: &mut BTreeMap<i32, String>,
     grace: Duration,
 ) {
     let mut left: std::collections::BTreeSet<i32> = pids.iter().copied().collect();
@@ -406,9 +531,9 @@ fn wait_for_exit(
         let wait = deadline.saturating_duration_since(Instant::now());
         let pending: Vec<i32> = left.iter().copied().collect();
         match rx.recv_timeout(wait) {
-            Ok(Msg::Exited { pid, .. }) => {
+            Ok(Msg::Exited { pid, how }) => {
                 left.remove(&pid);
-                robots.remove(&pid);
+                ended.insert(pid, how);
             }
             Ok(Msg::Interrupt) => {
                 signal_all(&pending, libc::SIGKILL);
@@ -422,6 +547,8 @@ fn wait_for_exit(
                     "processes still running; sending SIGTERM"
                 );
                 signal_all(&pending, libc::SIGTERM);
+                // A process stopped from outside acts on SIGTERM only once continued.
+                signal_all(&pending, libc::SIGCONT);
                 stage = 1;
                 deadline = Instant::now() + EXIT_GRACE;
             }

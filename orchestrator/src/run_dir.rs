@@ -92,6 +92,8 @@ pub fn read_tracks(dir: &Path) -> anyhow::Result<Vec<RobotTrack>> {
         let state = match f[8] {
             "down" => RobotState::Down,
             "dead" => RobotState::Dead,
+            "frozen" => RobotState::Frozen,
+            "restarting" => RobotState::Restarting,
             _ => RobotState::Active,
         };
         let t = tracks.entry(id).or_insert_with(|| RobotTrack {
@@ -118,6 +120,59 @@ pub fn write_plots(dir: &Path, cfg: &Config) -> anyhow::Result<()> {
     )
 }
 
+/// After the world process died, cuts `trajectory.csv` back to its last complete tick (all
+/// `robots` rows) and `events.jsonl` to whole lines of ticks up to it. The world writes each
+/// tick with one `write_all`, but the kernel may cut a large write short when a fatal signal
+/// arrives, so the records are made whole here rather than trusted. Returns the last tick.
+pub fn trim_torn_records(dir: &Path, robots: usize) -> anyhow::Result<Option<u64>> {
+    let path = dir.join("trajectory.csv");
+    let text = std::fs::read(&path).with_context(|| format!("{}", path.display()))?;
+    let mut keep = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+    let whole = String::from_utf8_lossy(&text[..keep]).into_owned();
+    let tick_of = |l: &str| l.split(',').next().and_then(|t| t.parse::<u64>().ok());
+    let rows: Vec<&str> = whole.lines().skip(1).collect();
+    let mut last = rows.last().and_then(|l| tick_of(l));
+    if let Some(t) = last {
+        let in_last = rows
+            .iter()
+            .rev()
+            .take_while(|l| tick_of(l) == Some(t))
+            .count();
+        if in_last < robots {
+            // Drop the torn tick's rows.
+            let cut: usize = rows.iter().rev().take(in_last).map(|l| l.len() + 1).sum();
+            keep -= cut;
+            last = rows.iter().rev().nth(in_last).and_then(|l| tick_of(l));
+        }
+    }
+    truncate(&path, keep as u64)?;
+
+    let path = dir.join("events.jsonl");
+    let text = std::fs::read_to_string(&path).unwrap_or_default();
+    let mut kept = 0;
+    for line in text.split_inclusive('\n') {
+        let Ok(v) = serde_json::from_str::<serde_json::Value>(line) else {
+            break;
+        };
+        if !line.ends_with('\n') || v["tick"].as_u64().zip(last).is_some_and(|(t, l)| t > l) {
+            break;
+        }
+        kept += line.len();
+    }
+    if kept < text.len() {
+        truncate(&path, kept as u64)?;
+    }
+    Ok(last)
+}
+
+fn truncate(path: &Path, len: u64) -> anyhow::Result<()> {
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(path)
+        .and_then(|f| f.set_len(len))
+        .with_context(|| format!("cannot trim {}", path.display()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -126,5 +181,33 @@ mod tests {
     fn civil_dates() {
         assert_eq!(civil_from_days(0), (1970, 1, 1));
         assert_eq!(civil_from_days(20_779), (2026, 11, 22));
+    }
+
+    #[test]
+    fn torn_records_are_cut_back_to_the_last_whole_tick() {
+        let dir = tempfile::tempdir().unwrap();
+        let header = "tick,id,x,y,theta,v,omega,lidar,state\n";
+        let rows = "0,0,1,1,0,0,0,1,active\n0,1,2,2,0,0,0,1,active\n\
+                    1,0,1,1,0,0,0,1,active\n1,1,2,2,0,0,0,1,active\n\
+                    2,0,1,1,0,0,0,1,active\n2,1,2,";
+        std::fs::write(dir.path().join("trajectory.csv"), format!("{header}{rows}")).unwrap();
+        std::fs::write(
+            dir.path().join("events.jsonl"),
+            "{\"event\":\"reached\",\"tick\":1,\"robot\":0}\n\
+             {\"event\":\"reached\",\"tick\":2,\"robot\":1}\n{\"event\":\"rea",
+        )
+        .unwrap();
+        assert_eq!(trim_torn_records(dir.path(), 2).unwrap(), Some(1));
+        let csv = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
+        assert!(csv.ends_with("1,1,2,2,0,0,0,1,active\n"), "{csv}");
+        assert_eq!(csv.lines().count(), 5);
+        let ev = std::fs::read_to_string(dir.path().join("events.jsonl")).unwrap();
+        assert_eq!(ev, "{\"event\":\"reached\",\"tick\":1,\"robot\":0}\n");
+        // Whole records are left alone.
+        assert_eq!(trim_torn_records(dir.path(), 2).unwrap(), Some(1));
+        assert_eq!(
+            std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap(),
+            csv
+        );
     }
 }

@@ -77,6 +77,10 @@ pub struct Scenario {
     /// A robot that has not answered within this many milliseconds is logged as late.
     #[serde(default = "default_deadline_ms")]
     pub deadline_ms: u64,
+    /// A robot that has answered nothing for this many milliseconds (a hung or externally
+    /// stopped process) is marked dead and killed, so one stuck robot cannot hang the run.
+    #[serde(default = "default_unresponsive_ms")]
+    pub unresponsive_ms: u64,
 }
 
 /// `[map]`: the arena. Its bounds are walls.
@@ -505,6 +509,9 @@ fn one() -> f64 {
 fn default_deadline_ms() -> u64 {
     2000
 }
+fn default_unresponsive_ms() -> u64 {
+    30_000
+}
 fn default_radius() -> f64 {
     0.15
 }
@@ -635,6 +642,12 @@ impl Config {
         range_u64("scenario.ticks", s.ticks, 1, 100_000_000)?;
         range_f("scenario.dt", s.dt, 1e-4, 10.0)?;
         range_u64("scenario.deadline_ms", s.deadline_ms, 1, 3_600_000)?;
+        range_u64(
+            "scenario.unresponsive_ms",
+            s.unresponsive_ms,
+            s.deadline_ms,
+            86_400_000,
+        )?;
 
         let m = &self.map;
         for (i, v) in m.bounds.iter().enumerate() {

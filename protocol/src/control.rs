@@ -15,6 +15,12 @@ pub enum Control {
         /// How it ended, e.g. "killed by signal 9".
         reason: String,
     },
+    /// The process of a robot the schedule killed or restarted has been reaped: reclaim its
+    /// ports. The world already accounted for the fault at its tick.
+    Reaped {
+        /// The robot.
+        robot: u32,
+    },
     /// End the run now and write the records (Ctrl-C or a failed child).
     Stop,
 }
@@ -35,6 +41,33 @@ pub enum Report {
     Kill {
         /// The robot.
         robot: u32,
+    },
+    /// The fault schedule froze this robot: SIGSTOP its process. The world no longer waits
+    /// for it.
+    Freeze {
+        /// The robot.
+        robot: u32,
+    },
+    /// The freeze ended: SIGCONT the process; the world waits for its answer again.
+    Thaw {
+        /// The robot.
+        robot: u32,
+    },
+    /// The fault schedule restarts this robot: SIGKILL its process and start a fresh one
+    /// with the same id. The world waits for the fresh process's hello before it rejoins.
+    Restart {
+        /// The robot.
+        robot: u32,
+        /// 1 for the first restart of this robot, 2 for the second, ...
+        incarnation: u32,
+    },
+    /// A robot answered nothing for `scenario.unresponsive_ms`: the world marked it dead;
+    /// SIGKILL its process. An unscheduled death: the run is no longer reproducible.
+    Unresponsive {
+        /// The robot.
+        robot: u32,
+        /// How long the world waited, ms.
+        waited_ms: u64,
     },
     /// Progress, sent at most a few times a second.
     Tick {

@@ -4,12 +4,29 @@
 use serde::{Deserialize, Serialize};
 
 /// The fault schedule.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FaultsConfig {
     /// SIGKILL a robot's process; it counts as dead from exactly that tick.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub kill: Vec<KillFault>,
+    /// SIGSTOP a robot's process from `from` to `to` (SIGCONT): it stands still, silent, and
+    /// answers again from `to` on.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub freeze: Vec<FreezeFault>,
+    /// SIGKILL a robot's process and start a fresh one with the same id: it is offline for
+    /// `down_ticks`, then rejoins with no memory.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub restart: Vec<RestartFault>,
+    /// Probability per running robot per tick that its process is killed (drawn from the seed).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub kill_rate: f64,
+    /// Probability per running robot per tick that its process is frozen for `freeze_ticks`.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub freeze_rate: f64,
+    /// Length of a random freeze, ticks.
+    #[serde(default = "default_freeze_ticks")]
+    pub freeze_ticks: u64,
     /// Split the radio: robots in different groups cannot hear each other from `from` to `to`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub partition: Vec<PartitionFault>,
@@ -38,6 +55,47 @@ pub enum FaultTarget {
     Named(String),
 }
 
+/// `[[faults.freeze]]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FreezeFault {
+    /// A robot id, or `"leader"`.
+    pub robot: FaultTarget,
+    /// First frozen tick.
+    pub from: u64,
+    /// First tick it answers again.
+    pub to: u64,
+}
+
+/// `[[faults.restart]]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RestartFault {
+    /// Tick at which the old process is killed.
+    pub tick: u64,
+    /// A robot id, or `"leader"`.
+    pub robot: FaultTarget,
+    /// Ticks offline before the fresh process rejoins (a reboot is not instant).
+    #[serde(default = "default_down_ticks")]
+    pub down_ticks: u64,
+}
+
+fn default_down_ticks() -> u64 {
+    10
+}
+
+fn default_freeze_ticks() -> u64 {
+    20
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+/// Most scheduled restarts a run may hold: each may briefly need a spare iceoryx2 port until
+/// the old process's ports are reclaimed.
+pub const MAX_RESTARTS: usize = 256;
+
 /// `[[faults.partition]]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -60,25 +118,96 @@ pub struct Window {
     pub to: u64,
 }
 
+impl Default for FaultsConfig {
+    fn default() -> Self {
+        FaultsConfig {
+            kill: Vec::new(),
+            freeze: Vec::new(),
+            restart: Vec::new(),
+            kill_rate: 0.0,
+            freeze_rate: 0.0,
+            freeze_ticks: default_freeze_ticks(),
+            partition: Vec::new(),
+            blackout: Vec::new(),
+        }
+    }
+}
+
+impl FaultTarget {
+    fn validate(&self, key: &str, robots: u32) -> Result<(), (String, String)> {
+        match self {
+            FaultTarget::Id(id) if *id >= robots => Err((
+                key.to_string(),
+                format!("expected a robot id in [0, {}], got {id}", robots - 1),
+            )),
+            FaultTarget::Named(name) if name != "leader" => Err((
+                key.to_string(),
+                format!("expected a robot id or \"leader\", got \"{name}\""),
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
 impl FaultsConfig {
+    /// True when the schedule can stop or restart robot processes.
+    pub fn has_process_faults(&self) -> bool {
+        !self.kill.is_empty()
+            || !self.freeze.is_empty()
+            || !self.restart.is_empty()
+            || self.kill_rate > 0.0
+            || self.freeze_rate > 0.0
+    }
+
     /// Checks ids against `robots` and windows for order; `Err((key, expected))`.
     pub fn validate(&self, robots: u32) -> Result<(), (String, String)> {
         for (i, k) in self.kill.iter().enumerate() {
-            match &k.robot {
-                FaultTarget::Id(id) if *id >= robots => {
-                    return Err((
-                        format!("faults.kill[{i}].robot"),
-                        format!("expected a robot id in [0, {}], got {id}", robots - 1),
-                    ));
-                }
-                FaultTarget::Named(name) if name != "leader" => {
-                    return Err((
-                        format!("faults.kill[{i}].robot"),
-                        format!("expected a robot id or \"leader\", got \"{name}\""),
-                    ));
-                }
-                _ => {}
+            k.robot
+                .validate(&format!("faults.kill[{i}].robot"), robots)?;
+        }
+        for (i, f) in self.freeze.iter().enumerate() {
+            f.robot
+                .validate(&format!("faults.freeze[{i}].robot"), robots)?;
+            window(&format!("faults.freeze[{i}]"), f.from, f.to)?;
+        }
+        if self.restart.len() > MAX_RESTARTS {
+            return Err((
+                "faults.restart".into(),
+                format!(
+                    "expected at most {MAX_RESTARTS} restarts, got {}",
+                    self.restart.len()
+                ),
+            ));
+        }
+        for (i, r) in self.restart.iter().enumerate() {
+            r.robot
+                .validate(&format!("faults.restart[{i}].robot"), robots)?;
+            if !(1..=1_000_000).contains(&r.down_ticks) {
+                return Err((
+                    format!("faults.restart[{i}].down_ticks"),
+                    format!("expected a value in [1, 1000000], got {}", r.down_ticks),
+                ));
             }
+        }
+        for (key, v) in [
+            ("faults.kill_rate", self.kill_rate),
+            ("faults.freeze_rate", self.freeze_rate),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err((
+                    key.into(),
+                    format!("expected a probability per robot per tick in [0, 1], got {v}"),
+                ));
+            }
+        }
+        if !(1..=1_000_000).contains(&self.freeze_ticks) {
+            return Err((
+                "faults.freeze_ticks".into(),
+                format!(
+                    "expected a value in [1, 1000000], got {}",
+                    self.freeze_ticks
+                ),
+            ));
         }
         for (i, p) in self.partition.iter().enumerate() {
             window(&format!("faults.partition[{i}]"), p.from, p.to)?;

@@ -106,13 +106,15 @@ pub struct WorldServices {
 }
 
 /// Creates the run's services for `robots` robots. Extra ports leave room for the world's
-/// control thread and for restarted robots whose old port is not yet reclaimed.
+/// control thread and for the fresh processes of up to `restarts` restarted robots whose old
+/// ports are not yet reclaimed.
 pub fn create_services(
     node: &Node<Svc>,
     run: &RunServices,
     robots: usize,
+    restarts: usize,
 ) -> Result<WorldServices, IpcError> {
-    let n = robots + 8;
+    let n = robots + 8 + restarts;
     let observations = node
         .service_builder(&service_name(&run.observations())?)
         .publish_subscribe::<[Observation]>()

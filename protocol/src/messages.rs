@@ -8,7 +8,7 @@ use crate::MAX_REPORT;
 use iceoryx2::prelude::*;
 
 /// Bumped whenever the layout or meaning of a message changes.
-pub const PROTOCOL_VERSION: u32 = 2;
+pub const PROTOCOL_VERSION: u32 = 3;
 /// Largest radio payload in bytes; larger frames are refused by [`Command::push_frame`].
 pub const MAX_PAYLOAD: usize = 128;
 /// Frames one robot may put into one [`Command`]; the radio capacity `K` is at most this.
@@ -65,6 +65,12 @@ pub enum RobotState {
     Down = 1,
     /// Its process is gone (killed or crashed): it stays where it is as an obstacle.
     Dead = 2,
+    /// Its process is stopped (a scheduled freeze): it stands still and silent, the world does
+    /// not wait for it, and it answers again when the freeze ends.
+    Frozen = 3,
+    /// Its process was killed for a scheduled restart and a fresh one is starting: it stands
+    /// still and silent until it rejoins.
+    Restarting = 4,
 }
 
 impl RobotState {
@@ -74,6 +80,8 @@ impl RobotState {
             0 => Some(RobotState::Active),
             1 => Some(RobotState::Down),
             2 => Some(RobotState::Dead),
+            3 => Some(RobotState::Frozen),
+            4 => Some(RobotState::Restarting),
             _ => None,
         }
     }
@@ -84,7 +92,15 @@ impl RobotState {
             RobotState::Active => "active",
             RobotState::Down => "down",
             RobotState::Dead => "dead",
+            RobotState::Frozen => "frozen",
+            RobotState::Restarting => "restarting",
         }
+    }
+
+    /// True when the robot's process must answer this tick's observation (a down robot's
+    /// process still runs and answers; its command is ignored).
+    pub fn expects_command(self) -> bool {
+        matches!(self, RobotState::Active | RobotState::Down)
     }
 }
 

@@ -43,4 +43,4 @@ pub mod shell;
 pub mod timing;
 pub mod world;
 
-pub use world::{Event, Robot, World, WorldMetrics};
+pub use world::{Event, ProcessSignal, Robot, World, WorldMetrics};

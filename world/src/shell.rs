@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 use crossbeam_channel::{Receiver, TryRecvError};
 use iceoryx2::identifiers::UniquePublisherId;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
+use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use swarmrt_protocol::config::Config;
 use swarmrt_protocol::control::{Control, Report};
@@ -21,7 +22,7 @@ use swarmrt_protocol::{
 
 use crate::records::Recorder;
 use crate::timing::{TickPhases, TickTimer, TickTiming};
-use crate::world::World;
+use crate::world::{ProcessSignal, World};
 
 /// Longest the world waits for all robots to say hello.
 const STARTUP_TIMEOUT: Duration = Duration::from_secs(120);
@@ -48,15 +49,15 @@ pub struct ShellStats {
 }
 
 /// Sleeps until the command event fires or `timeout` passes. A termination signal arriving
-/// during the wait is a request to stop (`Ok(true)`), not a failure.
+/// during the wait is a request to stop (`Ok(true)`), not a failure; any other interruption
+/// (the EINTR Linux returns after SIGSTOP and SIGCONT) is a spurious wake.
 fn wait(
     listener: &Listener<ipc::Svc>,
     node: &Node<ipc::Svc>,
     timeout: Duration,
 ) -> Result<bool, IpcError> {
     match listener.timed_wait(|_| {}, timeout) {
-        Ok(_) => Ok(node.wait(Duration::ZERO).is_err()),
-        Err(ListenerWaitError::InterruptSignal) => Ok(true),
+        Ok(_) | Err(ListenerWaitError::InterruptSignal) => Ok(node.wait(Duration::ZERO).is_err()),
         Err(e) => Err(e.into()),
     }
 }
@@ -127,7 +128,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
         Err(e) => tracing::warn!("cannot raise the open-file limit: {e}"),
     }
     let node = ipc::node(run, &run.world_node_name())?;
-    let services = ipc::create_services(&node, run, n)?;
+    let services = ipc::create_services(&node, run, n, cfg.faults.restart.len())?;
     let publisher = services
         .observations
         .publisher_builder()
@@ -186,17 +187,79 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
 
     // Phase 2: lock-step ticks.
     let deadline = Duration::from_millis(cfg.scenario.deadline_ms);
+    let unresponsive = Duration::from_millis(cfg.scenario.unresponsive_ms);
     let mut obs = vec![Observation::empty(0, 0); n];
     let mut commands: Vec<Option<Command>> = vec![None; n];
     let mut last_progress = Instant::now();
     let mut timer = TickTimer::default();
+    // Robots restarted by the schedule whose fresh process has not said hello yet.
+    let mut reborn: BTreeSet<u32> = BTreeSet::new();
     let events = world.drain_events();
     recorder.record(world.tick(), world.robots(), &events)?;
     while !interrupted && !world.finished() {
-        for robot in world.take_kills() {
-            report(&Report::Kill { robot });
+        let mut rejoining: BTreeSet<u32> = BTreeSet::new();
+        for signal in world.take_signals() {
+            match signal {
+                ProcessSignal::Kill(robot) => {
+                    robot_of.retain(|_, r| *r != robot);
+                    reborn.remove(&robot);
+                    report(&Report::Kill { robot });
+                }
+                ProcessSignal::Freeze(robot) => report(&Report::Freeze { robot }),
+                ProcessSignal::Thaw(robot) => report(&Report::Thaw { robot }),
+                ProcessSignal::Restart { robot, incarnation } => {
+                    // Samples from the old process are no robot's answer any more.
+                    robot_of.retain(|_, r| *r != robot);
+                    reborn.insert(robot);
+                    report(&Report::Restart { robot, incarnation });
+                }
+                ProcessSignal::Rejoin(robot) => {
+                    rejoining.insert(robot);
+                }
+            }
         }
         let tick = world.tick();
+        // A rejoining robot's fresh process must be bound before its first observation.
+        let hello_since = Instant::now();
+        loop {
+            let mut none = BTreeSet::new();
+            receive(
+                &subscriber,
+                &mut robot_of,
+                &mut reborn,
+                &mut none,
+                &mut commands,
+                &mut stats,
+            )?;
+            interrupted |= drain_control(&control, &node, &mut world, &mut none)?;
+            rejoining.retain(|r| {
+                reborn.contains(r) && world.robots()[*r as usize].state != RobotState::Dead
+            });
+            if rejoining.is_empty() || interrupted {
+                break;
+            }
+            if hello_since.elapsed() >= unresponsive {
+                for &robot in &rejoining {
+                    give_up(
+                        &mut world,
+                        robot,
+                        hello_since.elapsed(),
+                        "never said hello after its restart",
+                    );
+                    reborn.remove(&robot);
+                }
+                break;
+            }
+            interrupted |= wait(
+                &listener,
+                &node,
+                unresponsive.saturating_sub(hello_since.elapsed()),
+            )?;
+        }
+        if interrupted {
+            break;
+        }
+
         let t0 = Instant::now();
         world.observe(&mut obs);
         let t1 = Instant::now();
@@ -215,40 +278,32 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
         let mut waiting: BTreeSet<u32> = world
             .robots()
             .iter()
-            .filter(|r| r.state != RobotState::Dead)
+            .filter(|r| r.state.expects_command())
             .map(|r| r.id)
             .collect();
         let sent_at = Instant::now();
         let mut late_logged = false;
         loop {
-            while let Some(sample) = subscriber.receive()? {
-                let origin = sample.origin();
-                let c = *sample.payload();
-                drop(sample);
-                let Some(&robot) = robot_of.get(&origin) else {
-                    stats.unknown_sender += 1;
-                    if stats.unknown_sender == 1 {
-                        tracing::warn!(
-                            claimed = c.robot,
-                            "command from a publisher that is no robot of this run"
-                        );
-                    }
-                    continue;
-                };
-                // The first sample after the observation is the robot's answer, whatever it
-                // says: World::validate refuses a wrong tick, kind, id or version, and the
-                // robot stands still this tick instead of the world waiting forever.
-                if waiting.remove(&robot) {
-                    commands[robot as usize] = Some(c);
-                } else {
-                    stats.extra_commands += 1;
-                }
-            }
+            receive(
+                &subscriber,
+                &mut robot_of,
+                &mut reborn,
+                &mut waiting,
+                &mut commands,
+                &mut stats,
+            )?;
             interrupted |= drain_control(&control, &node, &mut world, &mut waiting)?;
             if waiting.is_empty() || interrupted {
                 break;
             }
             let waited = sent_at.elapsed();
+            if waited >= unresponsive {
+                for robot in std::mem::take(&mut waiting) {
+                    robot_of.retain(|_, r| *r != robot);
+                    give_up(&mut world, robot, waited, "no answer");
+                }
+                break;
+            }
             let timeout = if waited < deadline {
                 deadline - waited
             } else {
@@ -257,7 +312,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
                     stats.late += waiting.len() as u64;
                     tracing::warn!(tick, late = ?waiting, "robots past the deadline");
                 }
-                Duration::from_millis(500)
+                unresponsive - waited
             };
             interrupted |= wait(&listener, &node, timeout)?;
         }
@@ -307,6 +362,61 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
     Ok(())
 }
 
+/// Receives every queued command sample. The first sample a bound robot sends after the
+/// observation is its answer, whatever it says: World::validate refuses a wrong tick, kind, id
+/// or version, and the robot stands still this tick instead of the world waiting forever. A
+/// hello from a new publisher binds it to a restarted robot awaiting its fresh process.
+fn receive(
+    subscriber: &Subscriber<ipc::Svc, Command, ()>,
+    robot_of: &mut BTreeMap<UniquePublisherId, u32>,
+    reborn: &mut BTreeSet<u32>,
+    waiting: &mut BTreeSet<u32>,
+    commands: &mut [Option<Command>],
+    stats: &mut ShellStats,
+) -> Result<(), IpcError> {
+    while let Some(sample) = subscriber.receive()? {
+        let origin = sample.origin();
+        let c = *sample.payload();
+        drop(sample);
+        let Some(&robot) = robot_of.get(&origin) else {
+            let hello = c.version == PROTOCOL_VERSION
+                && CommandKind::from_u32(c.kind) == Some(CommandKind::Hello);
+            if hello && reborn.remove(&c.robot) {
+                robot_of.insert(origin, c.robot);
+                tracing::debug!(robot = c.robot, pid = c.pid, "restarted robot ready");
+                continue;
+            }
+            stats.unknown_sender += 1;
+            if stats.unknown_sender == 1 {
+                tracing::warn!(
+                    claimed = c.robot,
+                    "command from a publisher that is no robot of this run"
+                );
+            }
+            continue;
+        };
+        if waiting.remove(&robot) {
+            commands[robot as usize] = Some(c);
+        } else {
+            stats.extra_commands += 1;
+        }
+    }
+    Ok(())
+}
+
+/// Marks a robot that answered nothing for `scenario.unresponsive_ms` dead and asks the
+/// orchestrator to kill its process: a hung robot must not hang the run.
+fn give_up(world: &mut World, robot: u32, waited: Duration, why: &str) {
+    let waited_ms = waited.as_millis() as u64;
+    tracing::warn!(
+        robot,
+        waited_ms,
+        "robot unresponsive ({why}); marking it dead"
+    );
+    world.mark_dead(robot, &format!("unresponsive: {why} for {waited_ms} ms"));
+    report(&Report::Unresponsive { robot, waited_ms });
+}
+
 /// Applies pending control messages; returns true when the run must stop.
 fn drain_control(
     control: &Receiver<Control>,
@@ -324,6 +434,10 @@ fn drain_control(
                 // ports, returning the observation samples its queue still held.
                 let cleaned = node.try_cleanup_dead_nodes();
                 tracing::debug!(robot, ?cleaned, "dead robot's node cleaned up");
+            }
+            Ok(Control::Reaped { robot }) => {
+                let cleaned = node.try_cleanup_dead_nodes();
+                tracing::debug!(robot, ?cleaned, "faulted robot's old node cleaned up");
             }
             Ok(Control::Stop) => stop = true,
             Err(TryRecvError::Empty) => return Ok(stop),

@@ -2,6 +2,7 @@
 //! [`Observation`] for the current tick, `step` takes every robot's [`Command`] and advances
 //! one tick. No I/O, no clock; every random draw comes from the run seed.
 
+use rand::Rng as _;
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 use std::collections::BTreeSet;
@@ -71,16 +72,21 @@ pub enum Event {
         /// Why (e.g. "process exited: signal 9").
         reason: String,
     },
-    /// A scheduled fault took effect (`kill`) or began or ended (`partition`, `blackout`).
+    /// A scheduled fault took effect or ended.
     Fault {
         /// Tick from which it holds.
         tick: u64,
-        /// `kill`, `partition_start`, `partition_end`, `blackout_start`, `blackout_end`, or
-        /// `kill_skipped` when a `"leader"` target had no live leader.
+        /// `kill`, `freeze`, `thaw`, `restart`, `rejoin`, `partition_start`, `partition_end`,
+        /// `blackout_start`, `blackout_end`, or `kill_skipped` / `freeze_skipped` /
+        /// `restart_skipped` when the target was dead, already out, or a `"leader"` target
+        /// had no leader.
         fault: String,
-        /// The robot, for a kill.
+        /// The robot, for a process fault.
         #[serde(skip_serializing_if = "Option::is_none")]
         robot: Option<u32>,
+        /// True for a fault drawn from `faults.kill_rate` / `faults.freeze_rate`.
+        #[serde(skip_serializing_if = "std::ops::Not::not")]
+        random: bool,
     },
     /// A robot's note about its own decisions (role, turn, consensus state).
     Note {
@@ -119,8 +125,12 @@ pub struct WorldMetrics {
     pub lidar_on_ticks: u64,
     /// Commands refused at the world boundary.
     pub rejected: u64,
-    /// Scheduled faults that took effect (kills, partitions and blackouts begun).
+    /// Faults that took effect (kills, freezes, restarts, partitions and blackouts begun).
     pub faults_injected: u64,
+    /// Robot processes restarted by the schedule.
+    pub restarts: u64,
+    /// Robot-ticks spent frozen.
+    pub frozen_ticks: u64,
     /// Radio counters.
     pub radio: RadioStats,
 }
@@ -139,8 +149,44 @@ pub struct World {
     metrics: WorldMetrics,
     /// The robot that last reported itself leader (the target of a `"leader"` fault).
     leader: Option<u32>,
-    /// Robots killed by the schedule whose processes the shell must still signal.
-    kills: Vec<u32>,
+    /// Process faults the shell must still carry out with real signals.
+    signals: Vec<ProcessSignal>,
+    /// Per robot, the freeze or restart it is in.
+    outages: Vec<Option<Outage>>,
+    /// Per robot, how many times the schedule restarted its process.
+    incarnations: Vec<u32>,
+    /// Draws of `faults.kill_rate` and `faults.freeze_rate`.
+    fault_rng: Rng,
+}
+
+/// What the process shell must do to a robot's process at this tick boundary. The world core
+/// has already applied it to its own state, so the run replays whatever the signal's timing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProcessSignal {
+    /// SIGKILL it: it is dead from this tick.
+    Kill(u32),
+    /// SIGSTOP it: it is frozen from this tick.
+    Freeze(u32),
+    /// SIGCONT it: it answers this tick's observation again.
+    Thaw(u32),
+    /// SIGKILL it and start a fresh process for the robot, its `incarnation`-th.
+    Restart {
+        /// The robot.
+        robot: u32,
+        /// 1 for the first restart, 2 for the second, ...
+        incarnation: u32,
+    },
+    /// The fresh process must have said hello before this tick is published.
+    Rejoin(u32),
+}
+
+/// A freeze or a restart in progress.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Outage {
+    /// First tick it answers again.
+    until: u64,
+    /// State to return to (a robot knocked down before stays down).
+    resume: RobotState,
 }
 
 /// Wraps an angle into (-pi, pi].
@@ -200,7 +246,10 @@ impl World {
             rejected_once: BTreeSet::new(),
             metrics: WorldMetrics::default(),
             leader: None,
-            kills: Vec::new(),
+            signals: Vec::new(),
+            outages: vec![None; n],
+            incarnations: vec![0; n],
+            fault_rng: rng::stream(seed, "faults", 0),
             robots,
         };
         world.check_goal();
@@ -261,6 +310,7 @@ impl World {
             return;
         }
         r.state = RobotState::Dead;
+        self.outages[robot as usize] = None;
         r.v = 0.0;
         r.omega = 0.0;
         r.lidar_on = false;
@@ -529,42 +579,148 @@ impl World {
         self.apply_faults();
     }
 
-    /// Robots the schedule killed since the last call: the process shell SIGKILLs them (via
-    /// the orchestrator); the world already counts them dead.
-    pub fn take_kills(&mut self) -> Vec<u32> {
-        std::mem::take(&mut self.kills)
+    /// Process faults applied since the last call, in order: the process shell carries them
+    /// out with real signals (via the orchestrator); in-process runs restart agents on them.
+    pub fn take_signals(&mut self) -> Vec<ProcessSignal> {
+        std::mem::take(&mut self.signals)
     }
 
-    /// Applies the faults scheduled at the current tick boundary.
+    fn fault_event(&mut self, fault: &str, robot: Option<u32>, random: bool) {
+        self.events.push(Event::Fault {
+            tick: self.tick,
+            fault: fault.into(),
+            robot,
+            random,
+        });
+    }
+
+    fn target(&self, t: &FaultTarget) -> Option<u32> {
+        match t {
+            FaultTarget::Id(id) => Some(*id),
+            FaultTarget::Named(_) => self.leader,
+        }
+    }
+
+    /// True when the robot's process runs and answers (not dead, frozen or restarting).
+    fn running(&self, robot: u32) -> bool {
+        self.robots
+            .get(robot as usize)
+            .is_some_and(|r| r.state.expects_command())
+    }
+
+    fn kill(&mut self, robot: u32, random: bool) {
+        self.metrics.faults_injected += 1;
+        self.fault_event("kill", Some(robot), random);
+        self.mark_dead(robot, "fault: kill");
+        self.signals.push(ProcessSignal::Kill(robot));
+    }
+
+    fn freeze(&mut self, robot: u32, until: u64, random: bool) {
+        self.metrics.faults_injected += 1;
+        self.fault_event("freeze", Some(robot), random);
+        let r = &mut self.robots[robot as usize];
+        self.outages[robot as usize] = Some(Outage {
+            until,
+            resume: r.state,
+        });
+        r.state = RobotState::Frozen;
+        r.v = 0.0;
+        r.omega = 0.0;
+        self.signals.push(ProcessSignal::Freeze(robot));
+    }
+
+    /// Applies the faults scheduled at the current tick boundary: first outages that end,
+    /// then kills, restarts, freezes, random faults and radio windows.
     fn apply_faults(&mut self) {
         let tick = self.tick;
         let faults = std::mem::take(&mut self.cfg.faults);
-        for k in faults.kill.iter().filter(|k| k.tick == tick) {
-            let target = match &k.robot {
-                FaultTarget::Id(id) => Some(*id),
-                FaultTarget::Named(_) => self.leader,
+        for robot in 0..self.robots.len() as u32 {
+            let Some(o) = self.outages[robot as usize].filter(|o| o.until == tick) else {
+                continue;
             };
-            let alive = target.filter(|&r| {
+            self.outages[robot as usize] = None;
+            let r = &mut self.robots[robot as usize];
+            let was = r.state;
+            r.state = o.resume;
+            if was == RobotState::Frozen {
+                self.fault_event("thaw", Some(robot), false);
+                self.signals.push(ProcessSignal::Thaw(robot));
+            } else {
+                self.fault_event("rejoin", Some(robot), false);
+                self.signals.push(ProcessSignal::Rejoin(robot));
+            }
+        }
+        for k in faults.kill.iter().filter(|k| k.tick == tick) {
+            let target = self.target(&k.robot);
+            // A frozen or restarting process can be killed too.
+            match target.filter(|&r| {
                 self.robots
                     .get(r as usize)
                     .is_some_and(|r| r.state != RobotState::Dead)
-            });
-            match alive {
+            }) {
+                Some(robot) => self.kill(robot, false),
+                None => self.fault_event("kill_skipped", target, false),
+            }
+        }
+        for k in faults.restart.iter().filter(|k| k.tick == tick) {
+            let target = self.target(&k.robot);
+            match target.filter(|&r| {
+                self.robots
+                    .get(r as usize)
+                    .is_some_and(|r| r.state != RobotState::Dead)
+            }) {
                 Some(robot) => {
                     self.metrics.faults_injected += 1;
-                    self.events.push(Event::Fault {
-                        tick,
-                        fault: "kill".into(),
-                        robot: Some(robot),
+                    self.metrics.restarts += 1;
+                    self.fault_event("restart", Some(robot), false);
+                    let i = robot as usize;
+                    self.incarnations[i] += 1;
+                    let r = &mut self.robots[i];
+                    // Restarting a frozen robot ends the freeze: the stopped process is killed.
+                    let resume = match (self.outages[i], r.state) {
+                        (Some(o), _) => o.resume,
+                        (None, s) => s,
+                    };
+                    self.outages[i] = Some(Outage {
+                        until: tick + k.down_ticks,
+                        resume,
                     });
-                    self.mark_dead(robot, "fault: kill");
-                    self.kills.push(robot);
+                    r.state = RobotState::Restarting;
+                    r.v = 0.0;
+                    r.omega = 0.0;
+                    r.lidar_on = false;
+                    if self.leader == Some(robot) {
+                        self.leader = None;
+                    }
+                    self.signals.push(ProcessSignal::Restart {
+                        robot,
+                        incarnation: self.incarnations[i],
+                    });
                 }
-                None => self.events.push(Event::Fault {
-                    tick,
-                    fault: "kill_skipped".into(),
-                    robot: target,
-                }),
+                None => self.fault_event("restart_skipped", target, false),
+            }
+        }
+        for f in faults.freeze.iter().filter(|f| f.from == tick) {
+            let target = self.target(&f.robot);
+            match target.filter(|&r| self.running(r)) {
+                Some(robot) => self.freeze(robot, f.to, false),
+                None => self.fault_event("freeze_skipped", target, false),
+            }
+        }
+        if faults.kill_rate > 0.0 || faults.freeze_rate > 0.0 {
+            // Two draws per robot every tick, whatever its state, so one robot's fate never
+            // shifts another's draws.
+            for robot in 0..self.robots.len() as u32 {
+                let kill = self.fault_rng.random::<f64>() < faults.kill_rate;
+                let freeze = self.fault_rng.random::<f64>() < faults.freeze_rate;
+                if !self.running(robot) {
+                    continue;
+                }
+                if kill {
+                    self.kill(robot, true);
+                } else if freeze {
+                    self.freeze(robot, tick + faults.freeze_ticks, true);
+                }
             }
         }
         let windows = faults
@@ -578,14 +734,15 @@ impl World {
                     if phase == "start" {
                         self.metrics.faults_injected += 1;
                     }
-                    self.events.push(Event::Fault {
-                        tick,
-                        fault: format!("{kind}_{phase}"),
-                        robot: None,
-                    });
+                    self.fault_event(&format!("{kind}_{phase}"), None, false);
                 }
             }
         }
+        self.metrics.frozen_ticks += self
+            .robots
+            .iter()
+            .filter(|r| r.state == RobotState::Frozen)
+            .count() as u64;
         self.radio
             .set_groups(faults.radio_groups(tick, self.robots.len()));
         self.cfg.faults = faults;

@@ -157,6 +157,11 @@ impl Consensus {
         Self::build(cfg, id, None, 0)
     }
 
+    /// Robot `id` in a fresh process after `incarnation` restarts, with no persistent state.
+    pub fn fresh(cfg: &Config, id: u32, incarnation: u32) -> Option<Consensus> {
+        Self::build(cfg, id, None, incarnation)
+    }
+
     /// Robot `id` restarting after a crash with the persistent state it had (`incarnation`
     /// counts its restarts and keys a fresh random stream for its timeouts).
     pub fn restore(

@@ -173,7 +173,7 @@ pub fn subscriber(run: &RunServices, mode: LossMode, work_us: u64) -> anyhow::Re
         }
         LossMode::RuntimeFree | LossMode::RuntimeLockStep => {
             let s =
-                proto_ipc::create_services(&node, run, 1).map_err(|e| anyhow::anyhow!("{e}"))?;
+                proto_ipc::create_services(&node, run, 1, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
             let sub = iox(s.observations.subscriber_builder().create(), "subscriber")?;
             let listener = iox(s.observations_event.listener_builder().create(), "listener")?;
             let publisher = iox(s.commands.publisher_builder().create(), "publisher")?;

@@ -103,6 +103,7 @@ pub fn run(
         metrics["run_id"] = json!(out.run_id);
         metrics["interrupted"] = json!(out.interrupted);
         metrics["startup_ms"] = json!(out.startup_ms);
+        metrics["processes"] = json!(out.processes);
         metrics["unscheduled_deaths"] = json!(
             out.unscheduled_deaths
                 .iter()
@@ -123,8 +124,9 @@ pub fn run(
     metrics["failed"] = json!(failure.is_some());
     if let Some(f) = &failure {
         metrics["failure"] = json!(f);
-        if metrics.get("ticks").is_none() {
-            metrics["ticks"] = json!(recorded_ticks(&dir));
+        match run_dir::trim_torn_records(&dir, cfg.robots.count as usize) {
+            Ok(last) => metrics["ticks"] = json!(last.unwrap_or(0)),
+            Err(e) => tracing::warn!("could not trim the records: {e:#}"),
         }
     }
     // Robots whose process is gone, by the schedule or by a crash.
