@@ -111,3 +111,254 @@ fn bad_fault_targets_are_refused_with_the_key() {
         assert_eq!(err.lines().count(), 1, "{err}");
     }
 }
+
+/// The processes `metrics.json` lists for `robot`: (incarnation, end, scheduled_kill).
+fn processes_of(m: &serde_json::Value, robot: u64) -> Vec<(u64, String, bool)> {
+    m["processes"]
+        .as_array()
+        .expect("metrics.json lists the processes")
+        .iter()
+        .filter(|p| p["robot"] == robot)
+        .map(|p| {
+            (
+                p["incarnation"].as_u64().unwrap(),
+                p["end"].as_str().unwrap().to_string(),
+                p["scheduled_kill"].as_bool().unwrap(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn freezes_and_restarts_replay_bit_for_bit_with_real_processes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let dir = tmp.path().join(name);
+        let mut args = vec![
+            "run",
+            "configs/raft_election.toml",
+            "--ticks",
+            "500",
+            "--set",
+            "faults.freeze=[{robot=3,from=100,to=150}]",
+            "--set",
+            "faults.restart=[{tick=250,robot=5,down_ticks=15},{tick=400,robot=\"leader\"}]",
+            "--out",
+        ];
+        args.push(dir.to_str().unwrap());
+        args.extend_from_slice(extra);
+        assert_ok(&swarm(&args, LIMIT));
+        dir
+    };
+    let p = run("processes", &[]);
+    let q = run("in-process", &["--in-process"]);
+    for f in ["trajectory.csv", "events.jsonl"] {
+        assert!(bytes(&p, f) == bytes(&q, f), "{f} differs between modes");
+    }
+    let m = metrics(&p);
+    assert_eq!(m["reproducible"], true, "{m}");
+    assert_eq!(m["unscheduled_deaths"], serde_json::json!([]), "{m}");
+    assert_eq!(m["restarts"], 2, "{m}");
+    assert_eq!(m["frozen_ticks"], 50, "{m}");
+    // The config's own leader kill, the freeze and both restarts.
+    assert_eq!(m["faults_injected"], 4, "{m}");
+    let c = &m["consensus"];
+    assert_eq!(c["safety_violations"], 0, "{c}");
+    assert!(
+        c["amnesia_restarts"].as_u64().unwrap() >= 1,
+        "a fresh process has lost its Raft state: {c}"
+    );
+    assert_eq!(
+        metrics(&q)["consensus"],
+        *c,
+        "same consensus metrics in both modes"
+    );
+
+    // Robot 5 had two processes: the first killed by the schedule, the fresh one ran to the
+    // end. The frozen robot 3 came back and ran to the end in its one process.
+    let ok = "exited with code 0".to_string();
+    assert_eq!(
+        processes_of(&m, 5),
+        vec![
+            (0, "killed by signal 9".to_string(), true),
+            (1, ok.clone(), false)
+        ]
+    );
+    assert_eq!(processes_of(&m, 3), vec![(0, ok.clone(), false)]);
+
+    let csv = String::from_utf8(bytes(&p, "trajectory.csv")).unwrap();
+    let state = |tick: u64, robot: u32| {
+        csv.lines()
+            .find(|l| l.starts_with(&format!("{tick},{robot},")))
+            .map(|l| l.rsplit(',').next().unwrap().to_string())
+            .unwrap()
+    };
+    assert_eq!(state(99, 3), "active");
+    assert_eq!(state(100, 3), "frozen");
+    assert_eq!(state(149, 3), "frozen");
+    assert_eq!(state(150, 3), "active");
+    assert_eq!(state(249, 5), "active");
+    assert_eq!(state(250, 5), "restarting");
+    assert_eq!(state(264, 5), "restarting");
+    assert_eq!(state(265, 5), "active");
+    // The fresh process announced itself to the consensus with a Boot note when it rejoined.
+    let events = String::from_utf8(bytes(&p, "events.jsonl")).unwrap();
+    assert!(
+        events.lines().any(|l| l
+            .starts_with(r#"{"event":"note","tick":265,"robot":5,"note":{"consensus":{"boot""#)),
+        "no boot note of the fresh robot 5"
+    );
+}
+
+#[test]
+fn a_frozen_process_is_really_stopped_and_a_restarted_one_really_new() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let child = start_long_run(
+        &dir,
+        &[
+            "--set",
+            "faults.freeze=[{robot=3,from=40,to=1000000}]",
+            "--set",
+            "faults.restart=[{tick=40,robot=1}]",
+        ],
+    );
+    let first = children_of(child.id());
+    let pid_of = |children: &[(i32, String)], robot: u32| {
+        children
+            .iter()
+            .filter(|(_, c)| c.contains("swarm-agent") && c.contains(&format!("--robot {robot} ")))
+            .map(|(p, c)| (*p, c.clone()))
+            .collect::<Vec<_>>()
+    };
+    let frozen = pid_of(&first, 3)[0].0;
+    let old = pid_of(&first, 1)[0].0;
+    wait_until("robot 3's process to be stopped", LIMIT, || {
+        std::fs::read_to_string(format!("/proc/{frozen}/stat"))
+            .is_ok_and(|s| s.rsplit_once(')').unwrap().1.trim_start().starts_with('T'))
+    });
+    wait_until("robot 1's fresh process", LIMIT, || {
+        let now = pid_of(&children_of(child.id()), 1);
+        !alive(old) && now.len() == 1 && now[0].1.contains("--incarnation 1 ")
+    });
+    let fresh = pid_of(&children_of(child.id()), 1)[0].0;
+    // The run goes on without robot 3 and with the fresh robot 1.
+    let at = last_tick(&dir);
+    wait_until("the run to go on", LIMIT, || last_tick(&dir) > at + 50);
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+    let out = wait_with_watchdog(child, LIMIT);
+    assert_ok(&out);
+    let m = metrics(&dir);
+    // Thawed at the end, the stopped robot saw the shutdown and exited by itself.
+    assert_eq!(
+        processes_of(&m, 3),
+        vec![(0, "exited with code 0".to_string(), false)]
+    );
+    assert_eq!(processes_of(&m, 1).len(), 2, "{m}");
+    assert_eq!(m["unscheduled_deaths"], serde_json::json!([]), "{m}");
+    let mut all = first.clone();
+    all.push((fresh, "fresh robot 1".into()));
+    assert_nothing_left(&all, &run_id_of(&first));
+}
+
+#[test]
+fn a_robot_stopped_from_outside_is_declared_unresponsive_and_killed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let child = start_long_run(
+        &dir,
+        &[
+            "--set",
+            "scenario.deadline_ms=200",
+            "--set",
+            "scenario.unresponsive_ms=1500",
+        ],
+    );
+    let children = children_of(child.id());
+    let victim = children
+        .iter()
+        .find(|(_, c)| c.contains("swarm-agent") && c.contains("--robot 6 "))
+        .map(|(p, _)| *p)
+        .unwrap();
+    unsafe {
+        libc::kill(victim, libc::SIGSTOP);
+    }
+    wait_until("the unresponsive robot to be killed", LIMIT, || {
+        !alive(victim)
+    });
+    let at = last_tick(&dir);
+    wait_until("the run to go on without it", LIMIT, || {
+        last_tick(&dir) > at + 50
+    });
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+    let out = wait_with_watchdog(child, LIMIT);
+    assert_ok(&out);
+    let m = metrics(&dir);
+    assert_eq!(m["dead"], 1, "{m}");
+    assert_eq!(m["unscheduled_deaths"][0]["robot"], 6, "{m}");
+    assert_eq!(m["reproducible"], false, "{m}");
+    assert!(m["shell"]["late"].as_u64().unwrap() >= 1, "{m}");
+    let events = String::from_utf8(bytes(&dir, "events.jsonl")).unwrap();
+    assert!(
+        events.lines().any(|l| l.contains(r#""event":"died""#)
+            && l.contains(r#""robot":6"#)
+            && l.contains("unresponsive")),
+        "{events}"
+    );
+    assert_nothing_left(&children, &run_id_of(&children));
+}
+
+#[test]
+fn random_faults_from_the_seed_replay_in_both_modes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let dir = tmp.path().join(name);
+        let mut args = vec![
+            "run",
+            "configs/goto_simple.toml",
+            "--ticks",
+            "400",
+            "--set",
+            "scenario.stop_when_done=false",
+            "--set",
+            "faults.kill_rate=0.0005",
+            "--set",
+            "faults.freeze_rate=0.004",
+            "--set",
+            "faults.freeze_ticks=15",
+            "--out",
+        ];
+        args.push(dir.to_str().unwrap());
+        args.extend_from_slice(extra);
+        assert_ok(&swarm(&args, LIMIT));
+        dir
+    };
+    let p = run("processes", &[]);
+    let q = run("in-process", &["--in-process"]);
+    for f in ["trajectory.csv", "events.jsonl"] {
+        assert!(bytes(&p, f) == bytes(&q, f), "{f} differs between modes");
+    }
+    let m = metrics(&p);
+    let events = String::from_utf8(bytes(&p, "events.jsonl")).unwrap();
+    let random = |fault: &str| {
+        events
+            .lines()
+            .filter(|l| {
+                l.contains(&format!(r#""fault":"{fault}""#)) && l.contains(r#""random":true"#)
+            })
+            .count() as u64
+    };
+    assert!(random("freeze") >= 3, "{events}");
+    assert_eq!(
+        m["faults_injected"].as_u64().unwrap(),
+        random("freeze") + random("kill"),
+        "{m}"
+    );
+    assert_eq!(m["dead"].as_u64().unwrap(), random("kill"), "{m}");
+    assert_eq!(m["reproducible"], true, "{m}");
+    assert_eq!(m["unscheduled_deaths"], serde_json::json!([]), "{m}");
+}
