@@ -17,19 +17,30 @@ use crate::Agent;
 const IDLE_CHECK: Duration = Duration::from_millis(500);
 
 /// Environment variable that makes one robot send malformed commands, for tests of the
-/// world's input checks: `<robot>:<mode>` with mode `nan` (NaN speed), `wrong-tick`,
-/// `impersonate` (claims another robot's id), `double` (answers every tick twice) or
-/// `bad-frame` (an outbox length past the maximum).
+/// world's input checks: `<robot>:<mode>` with mode `nan` (NaN speed), `inf` (infinite turn
+/// rate), `fast` (a speed far past the limit), `wrong-tick`, `wrong-version`, `impersonate`
+/// (claims another robot's id), `double` (answers every tick twice), `bad-frame` (an outbox
+/// length past the maximum), `oversized-frame` (a frame length past the payload size),
+/// `garbage-frame` (a payload that is no message), `frame-to-nobody` (a unicast to an unknown
+/// robot), `garbage-notes` (a report that does not decode) or `panic` (panics at tick 20).
 pub const MISBEHAVE_ENV: &str = "SWARMRT_TEST_MISBEHAVE";
 
 /// How a misbehaving robot corrupts its commands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Misbehave {
     Nan,
+    Inf,
+    Fast,
     WrongTick,
+    WrongVersion,
     Impersonate,
     Double,
     BadFrame,
+    OversizedFrame,
+    GarbageFrame,
+    FrameToNobody,
+    GarbageNotes,
+    Panic,
 }
 
 fn misbehave_for(id: u32) -> Option<Misbehave> {
@@ -40,10 +51,18 @@ fn misbehave_for(id: u32) -> Option<Misbehave> {
     }
     match mode {
         "nan" => Some(Misbehave::Nan),
+        "inf" => Some(Misbehave::Inf),
+        "fast" => Some(Misbehave::Fast),
         "wrong-tick" => Some(Misbehave::WrongTick),
+        "wrong-version" => Some(Misbehave::WrongVersion),
         "impersonate" => Some(Misbehave::Impersonate),
         "double" => Some(Misbehave::Double),
         "bad-frame" => Some(Misbehave::BadFrame),
+        "oversized-frame" => Some(Misbehave::OversizedFrame),
+        "garbage-frame" => Some(Misbehave::GarbageFrame),
+        "frame-to-nobody" => Some(Misbehave::FrameToNobody),
+        "garbage-notes" => Some(Misbehave::GarbageNotes),
+        "panic" => Some(Misbehave::Panic),
         _ => None,
     }
 }
@@ -103,16 +122,51 @@ pub fn run(run: &RunServices, cfg: &Config, id: u32, incarnation: u32) -> Result
                 continue;
             }
             let mut cmd = agent.step(obs);
+            let obs_tick = obs.tick;
             drop(sample);
             match misbehave {
                 Some(Misbehave::Nan) => cmd.v = f64::NAN,
+                Some(Misbehave::Inf) => cmd.omega = f64::INFINITY,
+                Some(Misbehave::Fast) => cmd.v = 1e6,
                 Some(Misbehave::WrongTick) => cmd.tick += 1,
+                Some(Misbehave::WrongVersion) => cmd.version = PROTOCOL_VERSION + 1,
                 Some(Misbehave::Impersonate) => cmd.robot = (id + 1) % cfg.robots.count,
                 Some(Misbehave::BadFrame) => cmd.outbox_len = u16::MAX,
+                Some(Misbehave::OversizedFrame) => {
+                    cmd.outbox_len = 1;
+                    cmd.outbox[0].len = u16::MAX;
+                }
+                Some(Misbehave::GarbageFrame) => {
+                    cmd.outbox_len = 1;
+                    cmd.outbox[0].dst = swarmrt_protocol::BROADCAST;
+                    cmd.outbox[0].len = 3;
+                    cmd.outbox[0].payload[..3].copy_from_slice(&[0xff, 0xff, 0xff]);
+                }
+                Some(Misbehave::FrameToNobody) => {
+                    let dst = cfg.robots.count + 7;
+                    let _ = cmd.push_frame(
+                        dst,
+                        &swarmrt_protocol::RadioMsg::Beacon {
+                            x: 0.0,
+                            y: 0.0,
+                            theta: 0.0,
+                        },
+                    );
+                    cmd.outbox[..cmd.outbox_len as usize]
+                        .iter_mut()
+                        .for_each(|f| f.dst = dst);
+                }
+                Some(Misbehave::GarbageNotes) => {
+                    cmd.report_len = 4;
+                    cmd.report[..4].copy_from_slice(&[0xff, 0xff, 0xff, 0xff]);
+                }
+                Some(Misbehave::Panic) if obs_tick == 20 => {
+                    panic!("test hook: robot {id} panics at tick 20")
+                }
                 Some(Misbehave::Double) => {
                     publisher.send_copy(cmd)?;
                 }
-                None => {}
+                Some(Misbehave::Panic) | None => {}
             }
             publisher.send_copy(cmd)?;
             notifier.notify()?;

@@ -1,5 +1,6 @@
-//! What robots say to each other. Encoded with postcard into [`crate::Frame`] payloads, so the
-//! world routes bytes without understanding them and later behaviours add variants freely.
+//! What robots say to each other. Encoded with postcard into [`crate::Frame`] payloads: the
+//! world only checks that a payload decodes (a command with one that does not is refused) and
+//! routes the bytes, so later behaviours add variants here freely.
 
 use serde::{Deserialize, Serialize};
 

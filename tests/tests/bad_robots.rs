@@ -3,7 +3,7 @@
 
 use std::process::{Command, Stdio};
 use std::time::Duration;
-use swarmrt_tests::{bytes, metrics, swarm_bin, wait_with_watchdog, workspace};
+use swarmrt_tests::{bytes, leftovers, metrics, swarm_bin, wait_with_watchdog, workspace};
 
 const LIMIT: Duration = Duration::from_secs(120);
 
@@ -34,8 +34,14 @@ fn run_with(mode: &str) -> (serde_json::Value, usize) {
         "{mode}: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let m = metrics(&dir);
+    let mut m = metrics(&dir);
     assert_eq!(m["ticks"], 60, "{mode}: the run went on");
+    let events = String::from_utf8(bytes(&dir, "events.jsonl")).unwrap();
+    m["rejected_events"] = events
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter(|e| e["event"] == "rejected")
+        .collect();
     let csv = String::from_utf8(bytes(&dir, "trajectory.csv")).unwrap();
     let mut positions: Vec<(String, String)> = csv
         .lines()
@@ -94,4 +100,44 @@ fn a_second_answer_in_one_tick_is_counted_and_ignored() {
     // way one sample per tick is surplus and the run goes on.
     let (m, _) = run_with("double");
     assert!(m["shell"]["extra_commands"].as_u64().unwrap() >= 59, "{m}");
+}
+
+#[test]
+fn every_kind_of_garbage_is_refused_counted_and_logged_once() {
+    for (mode, reason) in [
+        ("inf", "non-finite speed"),
+        ("fast", "speed out of range"),
+        ("wrong-version", "wrong protocol version"),
+        ("oversized-frame", "oversized radio frame"),
+        ("garbage-frame", "malformed radio frame"),
+        ("frame-to-nobody", "radio frame to an unknown robot"),
+        ("garbage-notes", "malformed report"),
+    ] {
+        let (m, positions) = run_with(mode);
+        assert_eq!(m["rejected"], 60, "{mode}: {m}");
+        assert_eq!(positions, 1, "{mode}: a refused command moves nothing");
+        let events = &m["rejected_events"];
+        assert_eq!(
+            events.as_array().map(Vec::len),
+            Some(1),
+            "{mode}: logged once, not per tick: {events}"
+        );
+        assert_eq!(events[0]["reason"], reason, "{mode}");
+        assert_eq!(events[0]["robot"], 3, "{mode}");
+    }
+}
+
+#[test]
+fn a_panicking_robot_is_a_death_not_a_hang_or_a_leak() {
+    let (m, positions) = run_with("panic");
+    assert_eq!(m["dead"], 1, "{m}");
+    assert_eq!(m["unscheduled_deaths"][0]["robot"], 3, "{m}");
+    assert_eq!(
+        m["unscheduled_deaths"][0]["how"], "exited with code 101",
+        "Rust's panic exit code: {m}"
+    );
+    assert_eq!(m["reproducible"], false, "{m}");
+    assert!(positions > 1, "it moved until it panicked");
+    let run_id = m["run_id"].as_str().unwrap();
+    assert!(leftovers(run_id).is_empty(), "{:?}", leftovers(run_id));
 }

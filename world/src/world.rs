@@ -11,7 +11,7 @@ use swarmrt_protocol::config::Config;
 use swarmrt_protocol::faults::FaultTarget;
 use swarmrt_protocol::{
     BROADCAST, Command, CommandKind, Frame, MAX_INBOX, MAX_LIDAR_RAYS, MAX_NEIGHBOURS, MAX_OUTBOX,
-    MAX_PAYLOAD, Neighbour, Note, Observation, PROTOCOL_VERSION, RobotState,
+    MAX_PAYLOAD, Neighbour, Note, Observation, PROTOCOL_VERSION, RadioMsg, RobotState,
 };
 
 use crate::grid::Grid;
@@ -432,6 +432,11 @@ impl World {
             }
             if f.dst != BROADCAST && f.dst as usize >= self.robots.len() {
                 return Err("radio frame to an unknown robot");
+            }
+            // The world routes bytes, but bytes no robot could read are refused at the
+            // boundary rather than delivered as noise.
+            if RadioMsg::decode(f.bytes()).is_none() {
+                return Err("malformed radio frame");
             }
         }
         Ok(())

@@ -114,6 +114,10 @@ fn nan_wrong_version_wrong_tick_and_bad_frames_are_rejected() {
     let mut c = good;
     c.push_frame(42, &BEACON).unwrap();
     assert_eq!(w.validate(0, &c), Err("radio frame to an unknown robot"));
+    let mut c = good;
+    c.push_frame(BROADCAST, &BEACON).unwrap();
+    c.outbox[0].payload[0] = 0xff;
+    assert_eq!(w.validate(0, &c), Err("malformed radio frame"));
     assert_eq!(
         w.validate(1, &good),
         Err("robot id does not match its slot")
