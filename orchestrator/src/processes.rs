@@ -2,9 +2,9 @@
 //! when a robot dies, stop everything cleanly on completion, Ctrl-C or a crashed child, and
 //! remove the run's iceoryx2 resources on every path.
 //!
-//! Three threads feed one channel the main loop sleeps on: the world's stdout reader
-//! (reports), the reaper (`waitpid` on every child, so iceoryx2 never sees zombies) and the
-//! Ctrl-C handler. No polling.
+//! Threads feed one channel the main loop sleeps on: the world's stdout reader (reports), one
+//! small reaper per child (`waitpid` on exactly that child, so iceoryx2 never sees zombies)
+//! and the Ctrl-C relay. No polling.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{BufRead, BufReader, Write};
@@ -134,30 +134,44 @@ fn describe(status: i32) -> String {
     }
 }
 
-/// Reaps every child. On ECHILD (no child right now) it waits for `spawned` to say more
-/// were started, and ends when `spawned`'s sender is dropped.
-fn spawn_reaper(tx: Sender<Msg>, spawned: Receiver<()>) {
-    std::thread::spawn(move || {
-        loop {
-            let mut status = 0;
-            let pid = unsafe { libc::waitpid(-1, &mut status, 0) };
-            if pid > 0 {
-                if tx
-                    .send(Msg::Exited {
-                        pid,
-                        how: describe(status),
-                    })
-                    .is_err()
-                {
-                    return;
-                }
-            } else if std::io::Error::last_os_error().raw_os_error() == Some(libc::EINTR) {
-                continue;
-            } else if spawned.recv().is_err() {
-                return; // ECHILD and the supervisor is done.
+/// Reaps one child: a small thread blocked in `waitpid(pid)`, so iceoryx2 never sees a zombie
+/// and a run never reaps a process that is not its own (an orchestrator may run several runs,
+/// as `swarm bench swarm` does, or have other children).
+fn reap(pid: i32, tx: Sender<Msg>) -> std::io::Result<()> {
+    std::thread::Builder::new()
+        .name(format!("reap-{pid}"))
+        .stack_size(64 * 1024)
+        .spawn(move || {
+            loop {
+                let mut status = 0;
+                // SAFETY: waitpid on our own child, writing only `status`.
+                let r = unsafe { libc::waitpid(pid, &mut status, 0) };
+                let how = if r == pid {
+                    describe(status)
+                } else if std::io::Error::last_os_error().raw_os_error() == Some(libc::EINTR) {
+                    continue;
+                } else {
+                    format!(
+                        "could not be waited for: {}",
+                        std::io::Error::last_os_error()
+                    )
+                };
+                let _ = tx.send(Msg::Exited { pid, how });
+                return;
             }
-        }
-    });
+        })
+        .map(|_| ())
+}
+
+/// Starts a robot's reaper; if even that fails, the robot is killed and reaped here so it
+/// cannot outlive the run unseen.
+fn reap_robot(pid: i32, tx: &Sender<Msg>) -> std::io::Result<()> {
+    reap(pid, tx.clone()).inspect_err(|_| {
+        signal_all(&[pid], libc::SIGKILL);
+        let mut status = 0;
+        // SAFETY: as in `reap`; the child was just sent SIGKILL, so this returns promptly.
+        unsafe { libc::waitpid(pid, &mut status, 0) };
+    })
 }
 
 /// The process currently running `robot`: after a restart the old one may not be reaped yet.
@@ -279,8 +293,11 @@ fn supervise(
             let _ = tx.send(Msg::WorldEof);
         });
     }
-    let (spawned_tx, spawned_rx) = crossbeam_channel::unbounded::<()>();
-    spawn_reaper(tx.clone(), spawned_rx);
+    if let Err(e) = reap(world_pid, tx.clone()) {
+        signal_all(&[world_pid], libc::SIGKILL);
+        let _ = world.wait();
+        bail!("cannot watch the world process: {e}");
+    }
 
     // Robots start once the world's services exist.
     let mut world_alive = true;
@@ -318,6 +335,7 @@ fn supervise(
             .arg(config_path)
             .stdin(Stdio::null())
             .spawn()
+            .and_then(|c| reap_robot(c.id() as i32, &tx).map(|()| c))
     };
     let mut robots: BTreeMap<i32, u32> = BTreeMap::new();
     // (pid, robot, incarnation) of every robot process, and how each ended.
@@ -332,7 +350,6 @@ fn supervise(
             Ok(c) => {
                 robots.insert(c.id() as i32, id);
                 started.push((c.id() as i32, id, 0));
-                let _ = spawned_tx.send(());
             }
             Err(e) => {
                 tracing::error!(robot = id, "cannot start robot: {e}");
@@ -398,7 +415,6 @@ fn supervise(
                     Ok(c) => {
                         robots.insert(c.id() as i32, robot);
                         started.push((c.id() as i32, robot, incarnation));
-                        let _ = spawned_tx.send(());
                     }
                     Err(e) => {
                         tracing::error!(robot, "cannot restart robot: {e}");
@@ -499,7 +515,6 @@ fn supervise(
         Duration::ZERO
     };
     wait_for_exit(&rx, &remaining, &mut ended, grace);
-    drop(spawned_tx);
     outcome.processes = started
         .into_iter()
         .map(|(pid, robot, incarnation)| RobotProcess {
