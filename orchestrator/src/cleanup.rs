@@ -3,7 +3,9 @@
 //! exact: nothing of another run, or of other iceoryx2 users, is touched.
 
 use std::path::Path;
-use swarmrt_protocol::services::{IPC_BASE_DIR, SHM_DIR, ipc_root_of, shm_prefix_of, valid_run_id};
+use swarmrt_protocol::services::{
+    IPC_BASE_DIR, LEGACY_IPC_BASE_DIR, SHM_DIR, ipc_root_of, shm_prefix_of, valid_run_id,
+};
 
 /// File in a run's iceoryx2 root holding the orchestrator's pid.
 pub const OWNER_FILE: &str = "swarmrt-owner.pid";
@@ -132,6 +134,19 @@ pub fn clean_dead_runs() -> (Vec<String>, Vec<String>) {
                 && !run_ids.iter().any(|r| r == id)
             {
                 run_ids.push(id.to_string());
+            }
+        }
+    }
+    // Roots left under the old base directory by earlier builds.
+    if let Ok(entries) = std::fs::read_dir(LEGACY_IPC_BASE_DIR) {
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().to_string();
+            let owner = std::fs::read_to_string(e.path().join(OWNER_FILE)).unwrap_or_default();
+            if (valid_run_id(&name) || name.starts_with(".claim-")) && !owner_alive(&owner) {
+                let _ = std::fs::remove_dir_all(e.path());
+                if valid_run_id(&name) && !run_ids.contains(&name) {
+                    run_ids.push(name);
+                }
             }
         }
     }

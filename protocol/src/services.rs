@@ -12,6 +12,8 @@ use std::path::PathBuf;
 /// recently deleted inodes made each robot's node take 50-700 ms to create under load; 500
 /// robots took 7.6 s to start there and 0.8 s here (docs/benchmarks.md).
 pub const IPC_BASE_DIR: &str = "/dev/shm/swarmrt-iceoryx2";
+/// Where builds before the move to tmpfs kept run roots; `swarm clean` still looks there.
+pub const LEGACY_IPC_BASE_DIR: &str = "/tmp/iceoryx2/swarmrt";
 /// Directory where POSIX shared memory segments appear on Linux.
 pub const SHM_DIR: &str = "/dev/shm";
 /// Event id a robot uses on the command event after publishing a command.
