@@ -150,15 +150,6 @@ impl FaultTarget {
 }
 
 impl FaultsConfig {
-    /// True when the schedule can stop or restart robot processes.
-    pub fn has_process_faults(&self) -> bool {
-        !self.kill.is_empty()
-            || !self.freeze.is_empty()
-            || !self.restart.is_empty()
-            || self.kill_rate > 0.0
-            || self.freeze_rate > 0.0
-    }
-
     /// Checks ids against `robots` and windows for order; `Err((key, expected))`.
     pub fn validate(&self, robots: u32) -> Result<(), (String, String)> {
         for (i, k) in self.kill.iter().enumerate() {

@@ -103,6 +103,22 @@ fn bad_fault_targets_are_refused_with_the_key() {
             "faults.kill[0].robot",
         ),
         ("faults.blackout=[{from=9,to=3}]", "faults.blackout[0].to"),
+        (
+            "faults.freeze=[{robot=1,from=50,to=50}]",
+            "faults.freeze[0].to",
+        ),
+        (
+            "faults.freeze=[{robot=9,from=5,to=50}]",
+            "faults.freeze[0].robot",
+        ),
+        (
+            "faults.restart=[{tick=5,robot=1,down_ticks=0}]",
+            "faults.restart[0].down_ticks",
+        ),
+        ("faults.kill_rate=1.5", "faults.kill_rate"),
+        ("faults.freeze_rate=-0.1", "faults.freeze_rate"),
+        ("faults.freeze_ticks=0", "faults.freeze_ticks"),
+        ("scenario.unresponsive_ms=10", "scenario.unresponsive_ms"),
     ] {
         let out = swarm(&["check", "configs/goto_simple.toml", "--set", set], LIMIT);
         assert_eq!(out.status.code(), Some(2), "{set}");
