@@ -22,13 +22,29 @@ pub struct ConfigError {
 }
 
 impl fmt::Display for ConfigError {
+    /// One line: control characters (a newline in a quoted key, a NUL or an escape sequence
+    /// echoed from the file) are shown escaped, never printed.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (file, message) = (escape_controls(&self.file), escape_controls(&self.message));
         if self.key.is_empty() {
-            write!(f, "{}: {}", self.file, self.message)
+            write!(f, "{file}: {message}")
         } else {
-            write!(f, "{}: key `{}`: {}", self.file, self.key, self.message)
+            write!(f, "{file}: key `{}`: {message}", escape_controls(&self.key))
         }
     }
+}
+
+/// `s` with every control character escaped as Rust does (`\n`, `\u{1b}`).
+pub fn escape_controls(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 impl std::error::Error for ConfigError {}
@@ -1026,6 +1042,26 @@ count = 4
             }),
             None
         );
+    }
+
+    #[test]
+    fn issue_5_control_characters_in_errors_are_escaped_to_keep_one_line() {
+        // A newline in an override's key (or a quoted key in the file) reached the output.
+        let e = load(MINIMAL, &["radio.lo\nss=1"]).unwrap_err();
+        assert_eq!(e.key, "radio.lo\nss");
+        assert_eq!(
+            e.to_string().lines().next().unwrap(),
+            e.to_string(),
+            "one line"
+        );
+        assert!(e.to_string().contains("key `radio.lo\\nss`"), "{e}");
+        let quoted = MINIMAL.replace("count = 4", "count = 4\n\"a\\u001b[2Jb\" = 1");
+        let e = load(&quoted, &[]).unwrap_err();
+        assert!(e.to_string().contains("key `robots.a\\u{1b}[2Jb`"), "{e}");
+        // TOML's error echoes the offending line, NUL and all.
+        let e = load("\u{0}[scenario]", &[]).unwrap_err();
+        assert!(!e.to_string().chars().any(char::is_control), "{e}");
+        assert!(e.to_string().contains("\\u{0}"), "{e}");
     }
 
     #[test]

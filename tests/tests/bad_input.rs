@@ -87,3 +87,16 @@ fn more_robots_than_the_map_has_room_for() {
         &["robots.start", "5000"],
     );
 }
+
+#[test]
+fn issue_5_newline_in_a_key_stays_on_one_line() {
+    refused(
+        &[
+            "check",
+            "configs/goto_simple.toml",
+            "--set",
+            "radio.lo\nss=1",
+        ],
+        &["radio.lo\\nss", "unknown field"],
+    );
+}
