@@ -669,9 +669,11 @@ impl Config {
             "map.goal",
             "a goal inside map.bounds",
         )?;
+        // Obstacles stay within MAX_COORD like the bounds: a rectangle from -1e308 to 1e308
+        // is finite, but its width is not, and the map's BVH panics on it.
         for (i, c) in m.circles.iter().enumerate() {
-            finite(&format!("map.circles[{i}].x"), c.x)?;
-            finite(&format!("map.circles[{i}].y"), c.y)?;
+            range_f(&format!("map.circles[{i}].x"), c.x, -MAX_COORD, MAX_COORD)?;
+            range_f(&format!("map.circles[{i}].y"), c.y, -MAX_COORD, MAX_COORD)?;
             range_f(&format!("map.circles[{i}].r"), c.r, 1e-3, 1e6)?;
         }
         for (i, r) in m.rectangles.iter().enumerate() {
@@ -681,7 +683,12 @@ impl Config {
                 ("x_max", r.x_max),
                 ("y_max", r.y_max),
             ] {
-                finite(&format!("map.rectangles[{i}].{k}"), v)?;
+                range_f(
+                    &format!("map.rectangles[{i}].{k}"),
+                    v,
+                    -MAX_COORD,
+                    MAX_COORD,
+                )?;
             }
             check(
                 r.x_max > r.x_min && r.y_max > r.y_min,
@@ -696,8 +703,10 @@ impl Config {
                 "at least 3 points",
             )?;
             for (j, pt) in p.points.iter().enumerate() {
-                finite(&format!("map.polygons[{i}].points[{j}]"), pt[0])?;
-                finite(&format!("map.polygons[{i}].points[{j}]"), pt[1])?;
+                for (k, v) in pt.iter().enumerate() {
+                    let key = format!("map.polygons[{i}].points[{j}][{k}]");
+                    range_f(&key, *v, -MAX_COORD, MAX_COORD)?;
+                }
             }
         }
 
@@ -1042,6 +1051,26 @@ count = 4
             }),
             None
         );
+    }
+
+    #[test]
+    fn issue_5_obstacle_wider_than_f64_is_refused_not_built() {
+        // Finite corners, infinite width: parry's BVH build panicked on it.
+        let e = load(
+            MINIMAL,
+            &["map.rectangles=[{ x_min = -1e308, y_min = 1.0, x_max = 1e308, y_max = 2.0 }]"],
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "map.rectangles[0].x_min", "{e}");
+        assert!(e.message.contains("[-1000000, 1000000]"), "{e}");
+        let e = load(MINIMAL, &["map.circles=[{ x = 1e300, y = 1.0, r = 0.5 }]"]).unwrap_err();
+        assert_eq!(e.key, "map.circles[0].x", "{e}");
+        let e = load(
+            MINIMAL,
+            &["map.polygons=[{ points = [[0.0, 0.0], [1e308, 0.0], [0.0, 1.0]] }]"],
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "map.polygons[0].points[1][0]", "{e}");
     }
 
     #[test]

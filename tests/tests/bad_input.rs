@@ -89,6 +89,24 @@ fn more_robots_than_the_map_has_room_for() {
 }
 
 #[test]
+fn issue_5_infinitely_wide_rectangle_is_refused_not_a_panic() {
+    // Finite corners whose difference overflows: parry's BVH build used to panic (exit 101).
+    refused(
+        &[
+            "check",
+            "configs/goto_simple.toml",
+            "--set",
+            "map.rectangles=[{ x_min = -1e308, y_min = 1.0, x_max = 1e308, y_max = 2.0 }]",
+        ],
+        &[
+            "goto_simple.toml",
+            "map.rectangles[0].x_min",
+            "[-1000000, 1000000]",
+        ],
+    );
+}
+
+#[test]
 fn issue_5_newline_in_a_key_stays_on_one_line() {
     refused(
         &[
