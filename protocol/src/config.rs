@@ -958,9 +958,22 @@ fn apply_override(table: &mut toml::Table, ov: &str) -> Result<(), (String, Stri
             "expected a dotted key like radio.loss".to_string(),
         ));
     }
-    let value = match toml::from_str::<toml::Table>(&format!("v = {}", raw.trim())) {
+    let raw = raw.trim();
+    let value = match toml::from_str::<toml::Table>(&format!("v = {raw}")) {
         Ok(mut t) => t.remove("v").expect("parsed key v"),
-        Err(_) => toml::Value::String(raw.trim().to_string()),
+        // A number TOML cannot hold (`--seed 18446744073709551615`, `1e400`, `.5`) is not
+        // meant as a string: say so instead of "invalid type: string".
+        Err(_) if raw.parse::<f64>().is_ok() && raw.contains(|c: char| c.is_ascii_digit()) => {
+            return Err((
+                key.to_string(),
+                format!(
+                    "expected a TOML number (an integer in [{}, {}] or a float such as 0.5 or 1e3), got {raw}",
+                    i64::MIN,
+                    i64::MAX
+                ),
+            ));
+        }
+        Err(_) => toml::Value::String(raw.to_string()),
     };
     let mut cur = table;
     for part in &parts[..parts.len() - 1] {
@@ -1091,6 +1104,25 @@ count = 4
         let e = load("\u{0}[scenario]", &[]).unwrap_err();
         assert!(!e.to_string().chars().any(char::is_control), "{e}");
         assert!(e.to_string().contains("\\u{0}"), "{e}");
+    }
+
+    #[test]
+    fn issue_5_a_number_toml_cannot_hold_is_not_read_as_a_string() {
+        // `swarm run --seed 18446744073709551615` (a valid u64) said "invalid type: string".
+        for (ov, key) in [
+            ("scenario.seed=18446744073709551615", "scenario.seed"),
+            ("radio.loss=1e400", "radio.loss"),
+            ("radio.loss=.5", "radio.loss"),
+        ] {
+            let e = load(MINIMAL, &[ov]).unwrap_err();
+            assert_eq!((e.file.as_str(), e.key.as_str()), ("--set", key), "{e}");
+            assert!(e.message.contains("9223372036854775807"), "{e}");
+        }
+        // Words still become strings, even those Rust reads as numbers.
+        let c = load(MINIMAL, &["radio.loss_model=gilbert-elliott"]).unwrap();
+        assert_eq!(c.radio.loss_model, LossModel::GilbertElliott);
+        let c = load(MINIMAL, &["scenario.name=Infinity"]).unwrap();
+        assert_eq!(c.scenario.name, "Infinity");
     }
 
     #[test]

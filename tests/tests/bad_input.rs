@@ -118,3 +118,22 @@ fn issue_5_newline_in_a_key_stays_on_one_line() {
         &["radio.lo\\nss", "unknown field"],
     );
 }
+
+#[test]
+fn issue_5_seed_beyond_toml_integers_is_named_not_called_a_string() {
+    // `--seed` takes any u64, but TOML (and so the config) holds at most i64::MAX; the error
+    // said "invalid type: string".
+    refused(
+        &[
+            "run",
+            "configs/goto_simple.toml",
+            "--seed",
+            "18446744073709551615",
+        ],
+        &[
+            "scenario.seed",
+            "9223372036854775807",
+            "18446744073709551615",
+        ],
+    );
+}
