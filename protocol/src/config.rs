@@ -1126,6 +1126,15 @@ count = 4
     }
 
     #[test]
+    fn issue_5_a_bad_fault_target_says_what_is_expected() {
+        // Was "data did not match any variant of untagged enum FaultTarget".
+        let e = load(MINIMAL, &["faults.kill=[{ tick = 1, robot = -1 }]"]).unwrap_err();
+        assert_eq!(e.key, "faults.kill[0].robot", "{e}");
+        assert!(e.message.contains("a robot id"), "{e}");
+        assert!(e.message.contains("\"leader\""), "{e}");
+    }
+
+    #[test]
     fn loss_above_one_is_refused_with_bounds() {
         let e = load(MINIMAL, &["radio.loss=1.5"]).unwrap_err();
         assert_eq!(e.key, "radio.loss");
