@@ -724,7 +724,7 @@ impl Config {
                     format!(
                         "a value above 2 * robots.radius = {} so robots do not start overlapping, got {}",
                         2.0 * r.radius,
-                        r.start.spacing
+                        short(r.start.spacing)
                     ),
                 )
             })?;
@@ -922,15 +922,28 @@ pub(crate) fn check(ok: bool, key: &str, expected: &str) -> Result<(), (String, 
 }
 
 fn finite(key: &str, v: f64) -> Result<(), (String, String)> {
-    check(v.is_finite(), key, &format!("a finite number, got {v}"))
+    check(
+        v.is_finite(),
+        key,
+        &format!("a finite number, got {}", short(v)),
+    )
 }
 
 pub(crate) fn range_f(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), (String, String)> {
     check(
         v.is_finite() && v >= lo && v <= hi,
         key,
-        &format!("a number in [{lo}, {hi}], got {v}"),
+        &format!("a number in [{lo}, {hi}], got {}", short(v)),
     )
+}
+
+/// `v` for an error message: `-1e308`, not its 309 digits.
+fn short(v: f64) -> String {
+    if v.is_finite() && v != 0.0 && !(1e-6..1e15).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
+    }
 }
 
 pub(crate) fn range_u64(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), (String, String)> {
@@ -1132,6 +1145,21 @@ count = 4
         assert_eq!(e.key, "faults.kill[0].robot", "{e}");
         assert!(e.message.contains("a robot id"), "{e}");
         assert!(e.message.contains("\"leader\""), "{e}");
+    }
+
+    #[test]
+    fn issue_5_huge_numbers_are_shown_short() {
+        // A 309-digit number made the "one clear line" several hundred characters long.
+        let e = load(MINIMAL, &["robots.max_speed=-1e308"]).unwrap_err();
+        assert!(e.message.ends_with("got -1e308"), "{e}");
+        let e = load(
+            MINIMAL,
+            &["robots.start={ x = 2.0, y = 2.0, spacing = 1e300 }"],
+        )
+        .unwrap_err();
+        assert!(e.message.ends_with("got 1e300"), "{e}");
+        let e = load(MINIMAL, &["radio.loss=1.5"]).unwrap_err();
+        assert!(e.message.ends_with("got 1.5"), "{e}");
     }
 
     #[test]
