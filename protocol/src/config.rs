@@ -22,13 +22,29 @@ pub struct ConfigError {
 }
 
 impl fmt::Display for ConfigError {
+    /// One line: control characters (a newline in a quoted key, a NUL or an escape sequence
+    /// echoed from the file) are shown escaped, never printed.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (file, message) = (escape_controls(&self.file), escape_controls(&self.message));
         if self.key.is_empty() {
-            write!(f, "{}: {}", self.file, self.message)
+            write!(f, "{file}: {message}")
         } else {
-            write!(f, "{}: key `{}`: {}", self.file, self.key, self.message)
+            write!(f, "{file}: key `{}`: {message}", escape_controls(&self.key))
         }
     }
+}
+
+/// `s` with every control character escaped as Rust does (`\n`, `\u{1b}`).
+pub fn escape_controls(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 impl std::error::Error for ConfigError {}
@@ -666,9 +682,11 @@ impl Config {
             "map.goal",
             "a goal inside map.bounds",
         )?;
+        // Obstacles stay within MAX_COORD like the bounds: a rectangle from -1e308 to 1e308
+        // is finite, but its width is not, and the map's BVH panics on it.
         for (i, c) in m.circles.iter().enumerate() {
-            finite(&format!("map.circles[{i}].x"), c.x)?;
-            finite(&format!("map.circles[{i}].y"), c.y)?;
+            range_f(&format!("map.circles[{i}].x"), c.x, -MAX_COORD, MAX_COORD)?;
+            range_f(&format!("map.circles[{i}].y"), c.y, -MAX_COORD, MAX_COORD)?;
             range_f(&format!("map.circles[{i}].r"), c.r, 1e-3, 1e6)?;
         }
         for (i, r) in m.rectangles.iter().enumerate() {
@@ -678,7 +696,12 @@ impl Config {
                 ("x_max", r.x_max),
                 ("y_max", r.y_max),
             ] {
-                finite(&format!("map.rectangles[{i}].{k}"), v)?;
+                range_f(
+                    &format!("map.rectangles[{i}].{k}"),
+                    v,
+                    -MAX_COORD,
+                    MAX_COORD,
+                )?;
             }
             check(
                 r.x_max > r.x_min && r.y_max > r.y_min,
@@ -693,8 +716,10 @@ impl Config {
                 "at least 3 points",
             )?;
             for (j, pt) in p.points.iter().enumerate() {
-                finite(&format!("map.polygons[{i}].points[{j}]"), pt[0])?;
-                finite(&format!("map.polygons[{i}].points[{j}]"), pt[1])?;
+                for (k, v) in pt.iter().enumerate() {
+                    let key = format!("map.polygons[{i}].points[{j}][{k}]");
+                    range_f(&key, *v, -MAX_COORD, MAX_COORD)?;
+                }
             }
         }
 
@@ -712,7 +737,7 @@ impl Config {
                     format!(
                         "a value above 2 * robots.radius = {} so robots do not start overlapping, got {}",
                         2.0 * r.radius,
-                        r.start.spacing
+                        short(r.start.spacing)
                     ),
                 )
             })?;
@@ -910,15 +935,28 @@ pub(crate) fn check(ok: bool, key: &str, expected: &str) -> Result<(), (String, 
 }
 
 fn finite(key: &str, v: f64) -> Result<(), (String, String)> {
-    check(v.is_finite(), key, &format!("a finite number, got {v}"))
+    check(
+        v.is_finite(),
+        key,
+        &format!("a finite number, got {}", short(v)),
+    )
 }
 
 pub(crate) fn range_f(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), (String, String)> {
     check(
         v.is_finite() && v >= lo && v <= hi,
         key,
-        &format!("a number in [{lo}, {hi}], got {v}"),
+        &format!("a number in [{lo}, {hi}], got {}", short(v)),
     )
+}
+
+/// `v` for an error message: `-1e308`, not its 309 digits.
+fn short(v: f64) -> String {
+    if v.is_finite() && v != 0.0 && !(1e-6..1e15).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
+    }
 }
 
 pub(crate) fn range_u64(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), (String, String)> {
@@ -946,9 +984,22 @@ fn apply_override(table: &mut toml::Table, ov: &str) -> Result<(), (String, Stri
             "expected a dotted key like radio.loss".to_string(),
         ));
     }
-    let value = match toml::from_str::<toml::Table>(&format!("v = {}", raw.trim())) {
+    let raw = raw.trim();
+    let value = match toml::from_str::<toml::Table>(&format!("v = {raw}")) {
         Ok(mut t) => t.remove("v").expect("parsed key v"),
-        Err(_) => toml::Value::String(raw.trim().to_string()),
+        // A number TOML cannot hold (`--seed 18446744073709551615`, `1e400`, `.5`) is not
+        // meant as a string: say so instead of "invalid type: string".
+        Err(_) if raw.parse::<f64>().is_ok() && raw.contains(|c: char| c.is_ascii_digit()) => {
+            return Err((
+                key.to_string(),
+                format!(
+                    "expected a TOML number (an integer in [{}, {}] or a float such as 0.5 or 1e3), got {raw}",
+                    i64::MIN,
+                    i64::MAX
+                ),
+            ));
+        }
+        Err(_) => toml::Value::String(raw.to_string()),
     };
     let mut cur = table;
     for part in &parts[..parts.len() - 1] {
@@ -1039,6 +1090,89 @@ count = 4
             }),
             None
         );
+    }
+
+    #[test]
+    fn issue_5_obstacle_wider_than_f64_is_refused_not_built() {
+        // Finite corners, infinite width: parry's BVH build panicked on it.
+        let e = load(
+            MINIMAL,
+            &["map.rectangles=[{ x_min = -1e308, y_min = 1.0, x_max = 1e308, y_max = 2.0 }]"],
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "map.rectangles[0].x_min", "{e}");
+        assert!(e.message.contains("[-1000000, 1000000]"), "{e}");
+        let e = load(MINIMAL, &["map.circles=[{ x = 1e300, y = 1.0, r = 0.5 }]"]).unwrap_err();
+        assert_eq!(e.key, "map.circles[0].x", "{e}");
+        let e = load(
+            MINIMAL,
+            &["map.polygons=[{ points = [[0.0, 0.0], [1e308, 0.0], [0.0, 1.0]] }]"],
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "map.polygons[0].points[1][0]", "{e}");
+    }
+
+    #[test]
+    fn issue_5_control_characters_in_errors_are_escaped_to_keep_one_line() {
+        // A newline in an override's key (or a quoted key in the file) reached the output.
+        let e = load(MINIMAL, &["radio.lo\nss=1"]).unwrap_err();
+        assert_eq!(e.key, "radio.lo\nss");
+        assert_eq!(
+            e.to_string().lines().next().unwrap(),
+            e.to_string(),
+            "one line"
+        );
+        assert!(e.to_string().contains("key `radio.lo\\nss`"), "{e}");
+        let quoted = MINIMAL.replace("count = 4", "count = 4\n\"a\\u001b[2Jb\" = 1");
+        let e = load(&quoted, &[]).unwrap_err();
+        assert!(e.to_string().contains("key `robots.a\\u{1b}[2Jb`"), "{e}");
+        // TOML's error echoes the offending line, NUL and all.
+        let e = load("\u{0}[scenario]", &[]).unwrap_err();
+        assert!(!e.to_string().chars().any(char::is_control), "{e}");
+        assert!(e.to_string().contains("\\u{0}"), "{e}");
+    }
+
+    #[test]
+    fn issue_5_a_number_toml_cannot_hold_is_not_read_as_a_string() {
+        // `swarm run --seed 18446744073709551615` (a valid u64) said "invalid type: string".
+        for (ov, key) in [
+            ("scenario.seed=18446744073709551615", "scenario.seed"),
+            ("radio.loss=1e400", "radio.loss"),
+            ("radio.loss=.5", "radio.loss"),
+        ] {
+            let e = load(MINIMAL, &[ov]).unwrap_err();
+            assert_eq!((e.file.as_str(), e.key.as_str()), ("--set", key), "{e}");
+            assert!(e.message.contains("9223372036854775807"), "{e}");
+        }
+        // Words still become strings, even those Rust reads as numbers.
+        let c = load(MINIMAL, &["radio.loss_model=gilbert-elliott"]).unwrap();
+        assert_eq!(c.radio.loss_model, LossModel::GilbertElliott);
+        let c = load(MINIMAL, &["scenario.name=Infinity"]).unwrap();
+        assert_eq!(c.scenario.name, "Infinity");
+    }
+
+    #[test]
+    fn issue_5_a_bad_fault_target_says_what_is_expected() {
+        // Was "data did not match any variant of untagged enum FaultTarget".
+        let e = load(MINIMAL, &["faults.kill=[{ tick = 1, robot = -1 }]"]).unwrap_err();
+        assert_eq!(e.key, "faults.kill[0].robot", "{e}");
+        assert!(e.message.contains("a robot id"), "{e}");
+        assert!(e.message.contains("\"leader\""), "{e}");
+    }
+
+    #[test]
+    fn issue_5_huge_numbers_are_shown_short() {
+        // A 309-digit number made the "one clear line" several hundred characters long.
+        let e = load(MINIMAL, &["robots.max_speed=-1e308"]).unwrap_err();
+        assert!(e.message.ends_with("got -1e308"), "{e}");
+        let e = load(
+            MINIMAL,
+            &["robots.start={ x = 2.0, y = 2.0, spacing = 1e300 }"],
+        )
+        .unwrap_err();
+        assert!(e.message.ends_with("got 1e300"), "{e}");
+        let e = load(MINIMAL, &["radio.loss=1.5"]).unwrap_err();
+        assert!(e.message.ends_with("got 1.5"), "{e}");
     }
 
     #[test]

@@ -47,7 +47,10 @@ pub struct KillFault {
 
 /// Which robot a process fault hits.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "expected a robot id (an integer from 0) or \"leader\""
+)]
 pub enum FaultTarget {
     /// This robot.
     Id(u32),

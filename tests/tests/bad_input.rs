@@ -87,3 +87,53 @@ fn more_robots_than_the_map_has_room_for() {
         &["robots.start", "5000"],
     );
 }
+
+#[test]
+fn issue_5_infinitely_wide_rectangle_is_refused_not_a_panic() {
+    // Finite corners whose difference overflows: parry's BVH build used to panic (exit 101).
+    refused(
+        &[
+            "check",
+            "configs/goto_simple.toml",
+            "--set",
+            "map.rectangles=[{ x_min = -1e308, y_min = 1.0, x_max = 1e308, y_max = 2.0 }]",
+        ],
+        &[
+            "goto_simple.toml",
+            "map.rectangles[0].x_min",
+            "[-1000000, 1000000]",
+        ],
+    );
+}
+
+#[test]
+fn issue_5_newline_in_a_key_stays_on_one_line() {
+    refused(
+        &[
+            "check",
+            "configs/goto_simple.toml",
+            "--set",
+            "radio.lo\nss=1",
+        ],
+        &["radio.lo\\nss", "unknown field"],
+    );
+}
+
+#[test]
+fn issue_5_seed_beyond_toml_integers_is_named_not_called_a_string() {
+    // `--seed` takes any u64, but TOML (and so the config) holds at most i64::MAX; the error
+    // said "invalid type: string".
+    refused(
+        &[
+            "run",
+            "configs/goto_simple.toml",
+            "--seed",
+            "18446744073709551615",
+        ],
+        &[
+            "scenario.seed",
+            "9223372036854775807",
+            "18446744073709551615",
+        ],
+    );
+}

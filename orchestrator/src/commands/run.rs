@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
-use swarmrt_protocol::config::Config;
+use swarmrt_protocol::config::{Config, ConfigError};
 use swarmrt_world::World;
 
 use crate::cli::RunArgs;
@@ -17,13 +17,11 @@ use crate::{in_process, processes, run_dir};
 /// bad obstacle is a user error before any process starts.
 pub fn load_config(path: &Path, set: &[String]) -> SwarmResult<Config> {
     let cfg = Config::load(path, set)?;
-    World::new(&cfg).map_err(|e| {
-        SwarmError::User(format!(
-            "{}: key `{}`: {}",
-            path.display(),
-            e.key,
-            e.message
-        ))
+    // Through ConfigError, so the line looks (and is escaped) like every other config error.
+    World::new(&cfg).map_err(|e| ConfigError {
+        file: path.display().to_string(),
+        key: e.key,
+        message: e.message,
     })?;
     Ok(cfg)
 }
