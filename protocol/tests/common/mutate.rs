@@ -114,8 +114,14 @@ pub const KEYS: &[&str] = &[
     "behaviour.verdict_ticks",
     "faults",
     "faults.kill",
+    "faults.freeze",
+    "faults.restart",
+    "faults.kill_rate",
+    "faults.freeze_rate",
+    "faults.freeze_ticks",
     "faults.partition",
     "faults.blackout",
+    "scenario.unresponsive_ms",
     "consensus",
     "consensus.algorithm",
     "consensus.election_timeout_min",
@@ -399,6 +405,12 @@ fn table() -> BoxedStrategy<String> {
         }),
         (smallish(), smallish())
             .prop_map(|(f, t)| format!("[[faults.blackout]]\nfrom = {f}\nto = {t}")),
+        (smallish(), smallish(), smallish()).prop_map(|(r, f, t)| {
+            format!("[[faults.freeze]]\nrobot = {r}\nfrom = {f}\nto = {t}")
+        }),
+        (smallish(), smallish(), smallish()).prop_map(|(t, r, d)| {
+            format!("[[faults.restart]]\ntick = {t}\nrobot = {r}\ndown_ticks = {d}")
+        }),
         (smallish(), value())
             .prop_map(|(t, g)| format!("[[consensus.propose]]\ntick = {t}\ngoal = {g}")),
         (smallish(), value())
