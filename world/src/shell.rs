@@ -221,7 +221,7 @@ pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcErr
         let tick = world.tick();
         // A rejoining robot's fresh process must be bound before its first observation.
         let hello_since = Instant::now();
-        loop {
+        while !rejoining.is_empty() {
             let mut none = BTreeSet::new();
             receive(
                 &subscriber,
