@@ -1,6 +1,7 @@
 //! The fault schedule: the world applies faults at tick boundaries and the orchestrator sends
 //! the real SIGKILL, so a faulted run still replays bit for bit from its seed.
 
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 use swarmrt_tests::*;
 
@@ -15,16 +16,16 @@ const FAULTS: [&str; 6] = [
     "faults.blackout=[{from=200,to=220}]",
 ];
 
-#[test]
-fn a_scheduled_kill_signals_the_real_process_and_the_run_replays() {
-    let tmp = tempfile::tempdir().unwrap();
+/// Runs `swarm run <args>` in processes mode and with `--in-process` into `tmp`, asserts the
+/// two wrote byte-identical records, and returns both run directories (processes first).
+fn run_both_modes(tmp: &Path, args: &[&str]) -> (PathBuf, PathBuf) {
     let run = |name: &str, extra: &[&str]| {
-        let dir = tmp.path().join(name);
-        let mut args = vec!["run", "configs/goto_simple.toml", "--ticks", "300", "--out"];
-        args.push(dir.to_str().unwrap());
-        args.extend_from_slice(&FAULTS);
-        args.extend_from_slice(extra);
-        assert_ok(&swarm(&args, LIMIT));
+        let dir = tmp.join(name);
+        let mut all = vec!["run"];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["--out", dir.to_str().unwrap()]);
+        all.extend_from_slice(extra);
+        assert_ok(&swarm(&all, LIMIT));
         dir
     };
     let p = run("processes", &[]);
@@ -32,6 +33,15 @@ fn a_scheduled_kill_signals_the_real_process_and_the_run_replays() {
     for f in ["trajectory.csv", "events.jsonl"] {
         assert!(bytes(&p, f) == bytes(&q, f), "{f} differs between modes");
     }
+    (p, q)
+}
+
+#[test]
+fn a_scheduled_kill_signals_the_real_process_and_the_run_replays() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut args = vec!["configs/goto_simple.toml", "--ticks", "300"];
+    args.extend_from_slice(&FAULTS);
+    let (p, _) = run_both_modes(tmp.path(), &args);
     let m = metrics(&p);
     assert_eq!(m["dead"], 1, "{m}");
     assert_eq!(m["robots_lost"], 1, "{m}");
@@ -148,10 +158,9 @@ fn processes_of(m: &serde_json::Value, robot: u64) -> Vec<(u64, String, bool)> {
 #[test]
 fn freezes_and_restarts_replay_bit_for_bit_with_real_processes() {
     let tmp = tempfile::tempdir().unwrap();
-    let run = |name: &str, extra: &[&str]| {
-        let dir = tmp.path().join(name);
-        let mut args = vec![
-            "run",
+    let (p, q) = run_both_modes(
+        tmp.path(),
+        &[
             "configs/raft_election.toml",
             "--ticks",
             "500",
@@ -159,18 +168,8 @@ fn freezes_and_restarts_replay_bit_for_bit_with_real_processes() {
             "faults.freeze=[{robot=3,from=100,to=150}]",
             "--set",
             "faults.restart=[{tick=250,robot=5,down_ticks=15},{tick=400,robot=\"leader\"}]",
-            "--out",
-        ];
-        args.push(dir.to_str().unwrap());
-        args.extend_from_slice(extra);
-        assert_ok(&swarm(&args, LIMIT));
-        dir
-    };
-    let p = run("processes", &[]);
-    let q = run("in-process", &["--in-process"]);
-    for f in ["trajectory.csv", "events.jsonl"] {
-        assert!(bytes(&p, f) == bytes(&q, f), "{f} differs between modes");
-    }
+        ],
+    );
     let m = metrics(&p);
     assert_eq!(m["reproducible"], true, "{m}");
     assert_eq!(m["unscheduled_deaths"], serde_json::json!([]), "{m}");
@@ -331,10 +330,9 @@ fn a_robot_stopped_from_outside_is_declared_unresponsive_and_killed() {
 #[test]
 fn random_faults_from_the_seed_replay_in_both_modes() {
     let tmp = tempfile::tempdir().unwrap();
-    let run = |name: &str, extra: &[&str]| {
-        let dir = tmp.path().join(name);
-        let mut args = vec![
-            "run",
+    let (p, _) = run_both_modes(
+        tmp.path(),
+        &[
             "configs/goto_simple.toml",
             "--ticks",
             "400",
@@ -346,18 +344,8 @@ fn random_faults_from_the_seed_replay_in_both_modes() {
             "faults.freeze_rate=0.004",
             "--set",
             "faults.freeze_ticks=15",
-            "--out",
-        ];
-        args.push(dir.to_str().unwrap());
-        args.extend_from_slice(extra);
-        assert_ok(&swarm(&args, LIMIT));
-        dir
-    };
-    let p = run("processes", &[]);
-    let q = run("in-process", &["--in-process"]);
-    for f in ["trajectory.csv", "events.jsonl"] {
-        assert!(bytes(&p, f) == bytes(&q, f), "{f} differs between modes");
-    }
+        ],
+    );
     let m = metrics(&p);
     let events = String::from_utf8(bytes(&p, "events.jsonl")).unwrap();
     let random = |fault: &str| {
