@@ -19,6 +19,7 @@ use super::fanout::own_fds;
 use super::stats::{Summary, summarize};
 use super::transports::idle_wait;
 use super::{PEER_TIMEOUT, bench_node, iox};
+use super::{WorldPorts, world_ports};
 
 /// The tick after which memory is read: every observation sample has been written once.
 pub const SAMPLE_TICK: u64 = proto_ipc::OBSERVATION_SAMPLES as u64 + 1;
@@ -51,17 +52,18 @@ pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
     }
     let node = bench_node(run, &run.world_node_name())?;
     let s = proto_ipc::create_services(&node, run, n, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let publisher = iox(
-        s.observations
-            .publisher_builder()
-            .initial_max_slice_len(n)
-            .override_sample_preallocation(|_| proto_ipc::OBSERVATION_SAMPLES)
-            .create(),
-        "publisher",
+    let WorldPorts {
+        publisher,
+        notifier,
+        commands,
+        listener,
+    } = world_ports(
+        &s.observations,
+        &s.observations_event,
+        &s.commands,
+        &s.commands_event,
+        n,
     )?;
-    let notifier = iox(s.observations_event.notifier_builder().create(), "notifier")?;
-    let commands = iox(s.commands.subscriber_builder().create(), "subscriber")?;
-    let listener = iox(s.commands_event.listener_builder().create(), "listener")?;
     say(&ChildMsg::Ready { addr: None })?;
 
     let ready_at = Instant::now();

@@ -26,6 +26,7 @@ use swarmrt_protocol::{Command, CommandKind, Observation, ObservationHeader, PRO
 use super::child::{ChildMsg, LossMode, say};
 use super::transports::{idle_wait, wait_for};
 use super::{PEER_TIMEOUT, Svc, bench_node, iox, service_name, spin_for};
+use super::{WorldPorts, world_ports};
 
 /// Side-event id: the subscriber has called `receive()` since the publisher appeared.
 const CONNECTED: usize = 1;
@@ -250,17 +251,18 @@ pub fn publisher(
         }
         LossMode::RuntimeFree | LossMode::RuntimeLockStep => {
             let s = proto_ipc::open_services(&node, run).map_err(|e| anyhow::anyhow!("{e}"))?;
-            let publisher = iox(
-                s.observations
-                    .publisher_builder()
-                    .initial_max_slice_len(1)
-                    .override_sample_preallocation(|_| proto_ipc::OBSERVATION_SAMPLES)
-                    .create(),
-                "publisher",
+            let WorldPorts {
+                publisher,
+                notifier,
+                commands,
+                listener,
+            } = world_ports(
+                &s.observations,
+                &s.observations_event,
+                &s.commands,
+                &s.commands_event,
+                1,
             )?;
-            let notifier = iox(s.observations_event.notifier_builder().create(), "notifier")?;
-            let commands = iox(s.commands.subscriber_builder().create(), "subscriber")?;
-            let listener = iox(s.commands_event.listener_builder().create(), "listener")?;
             iox(notifier.notify(), "announce")?;
             await_side(&side, CONNECTED)?;
             start = Instant::now();

@@ -161,6 +161,46 @@ pub fn iox<T, E: std::fmt::Debug>(r: Result<T, E>, what: &str) -> anyhow::Result
     r.map_err(|e| anyhow::anyhow!("{what}: {e:?}"))
 }
 
+/// The world side of the runtime's services, as the world shell opens it: the observation
+/// slice publisher (`slots` robots) and its event, the command subscriber and its event.
+pub struct WorldPorts {
+    /// Observation slices.
+    pub publisher: iceoryx2::port::publisher::Publisher<
+        Svc,
+        [swarmrt_protocol::Observation],
+        swarmrt_protocol::ObservationHeader,
+    >,
+    /// Wakes the robots.
+    pub notifier: iceoryx2::port::notifier::Notifier<Svc>,
+    /// Commands from every robot.
+    pub commands: iceoryx2::port::subscriber::Subscriber<Svc, swarmrt_protocol::Command, ()>,
+    /// Woken by the robots.
+    pub listener: iceoryx2::port::listener::Listener<Svc>,
+}
+
+/// Opens [`WorldPorts`] on the four service handles (created or opened).
+pub fn world_ports(
+    observations: &proto_ipc::ObservationService,
+    observations_event: &proto_ipc::EventService,
+    commands: &proto_ipc::CommandService,
+    commands_event: &proto_ipc::EventService,
+    slots: usize,
+) -> anyhow::Result<WorldPorts> {
+    Ok(WorldPorts {
+        publisher: iox(
+            observations
+                .publisher_builder()
+                .initial_max_slice_len(slots)
+                .override_sample_preallocation(|_| proto_ipc::OBSERVATION_SAMPLES)
+                .create(),
+            "publisher",
+        )?,
+        notifier: iox(observations_event.notifier_builder().create(), "notifier")?,
+        commands: iox(commands.subscriber_builder().create(), "subscriber")?,
+        listener: iox(commands_event.listener_builder().create(), "listener")?,
+    })
+}
+
 /// CLOCK_MONOTONIC in nanoseconds: the same clock in every process of this machine, so
 /// timestamps taken in different processes can be subtracted.
 pub fn monotonic_ns() -> u64 {

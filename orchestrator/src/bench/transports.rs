@@ -29,6 +29,7 @@ use swarmrt_protocol::{Command, Observation, ObservationHeader, PROTOCOL_VERSION
 use super::child::{ChildMsg, Transport, say};
 use super::stats::{Summary, summarize};
 use super::{PEER_TIMEOUT, Svc, bench_node, iox, service_name};
+use super::{WorldPorts, world_ports};
 
 /// Bytes of the message header (kind u32, pad, seq u64, value u64).
 pub const HEADER: usize = 24;
@@ -604,17 +605,18 @@ pub fn path_world(run: &RunServices, runtime: bool, secs: f64) -> anyhow::Result
     let mut rtts = Vec::new();
     if runtime {
         let s = proto_ipc::create_services(&node, run, 1, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let publisher = iox(
-            s.observations
-                .publisher_builder()
-                .initial_max_slice_len(1)
-                .override_sample_preallocation(|_| proto_ipc::OBSERVATION_SAMPLES)
-                .create(),
-            "publisher",
+        let WorldPorts {
+            publisher,
+            notifier,
+            commands: subscriber,
+            listener,
+        } = world_ports(
+            &s.observations,
+            &s.observations_event,
+            &s.commands,
+            &s.commands_event,
+            1,
         )?;
-        let notifier = iox(s.observations_event.notifier_builder().create(), "notifier")?;
-        let subscriber = iox(s.commands.subscriber_builder().create(), "subscriber")?;
-        let listener = iox(s.commands_event.listener_builder().create(), "listener")?;
         say(&ChildMsg::Ready { addr: None })?;
         // Hello first, as in the runtime.
         wait_for(&listener, || {
