@@ -25,10 +25,10 @@ struct Args {
 /// Entry point of the process (the `swarm-agent` binary in the orchestrator package).
 pub fn main() -> std::process::ExitCode {
     let args = Args::parse();
-    swarmrt_protocol::logging::init();
+    swarmrt_scenario::process::init_logging();
     let span = tracing::info_span!("robot", agent_id = args.robot);
     let _enter = span.enter();
-    let (run, cfg) = match swarmrt_protocol::child::load_run(&args.run_id, &args.config) {
+    let (run, cfg) = match swarmrt_scenario::process::load_run(&args.run_id, &args.config) {
         Ok(x) => x,
         Err(e) => {
             tracing::error!("{e}");

@@ -2,11 +2,15 @@
 //! is pure: no I/O, no clock; its randomness comes from the run seed and the robot id. The
 //! process shell (`shell`) only moves observations and commands through iceoryx2.
 //!
-//! ```
-//! use swarmrt_agent::Agent;
-//! use swarmrt_protocol::{config::Config, Observation};
+//! Where things are: [`behaviours`] (one folder per behaviour, listed once in [`registry`]),
+//! [`consensus`] (election, replicated log, quadrant leader choice), [`inbox`] (a decoded
+//! radio message), [`agent`] (one robot's tick).
 //!
-//! let cfg = Config::from_toml_str("doc.toml", r#"
+//! ```
+//! use swarmrt_agent::{Agent, registry};
+//! use swarmrt_protocol::Observation;
+//!
+//! let cfg = registry::from_toml_str("doc.toml", r#"
 //!     [scenario]
 //!     name = "doc"
 //!     ticks = 5
@@ -16,6 +20,7 @@
 //!     [robots]
 //!     count = 1
 //! "#, &[]).unwrap();
+//! assert_eq!(cfg.behaviour.params["speed"].as_float(), Some(0.5), "goto's default, resolved");
 //! let mut agent = Agent::new(&cfg, 0);
 //! let mut obs = Observation::empty(0, 0);
 //! obs.x = 2.0;
@@ -26,10 +31,14 @@
 #![warn(missing_docs)]
 
 pub mod agent;
+pub mod behaviour;
 pub mod behaviours;
 pub mod cli;
 pub mod consensus;
+pub mod inbox;
+pub mod registry;
 pub mod shell;
 
-pub use agent::{Agent, Decoded};
+pub use agent::Agent;
+pub use registry::{Note, RadioMsg};
 pub use swarmrt_protocol::{Command, Observation};

@@ -5,10 +5,10 @@ use std::time::Duration;
 
 use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
-use swarmrt_protocol::config::Config;
 use swarmrt_protocol::ipc::{self, IpcError};
 use swarmrt_protocol::services::{EVENT_COMMAND, RunServices};
 use swarmrt_protocol::{Command, PROTOCOL_VERSION, RobotState};
+use swarmrt_scenario::Config;
 
 use crate::Agent;
 
@@ -146,11 +146,11 @@ pub fn run(run: &RunServices, cfg: &Config, id: u32, incarnation: u32) -> Result
                     let dst = cfg.robots.count + 7;
                     let _ = cmd.push_frame(
                         dst,
-                        &swarmrt_protocol::RadioMsg::Beacon {
+                        &crate::RadioMsg::Goto(crate::behaviours::goto::Beacon {
                             x: 0.0,
                             y: 0.0,
                             theta: 0.0,
-                        },
+                        }),
                     );
                     cmd.outbox[..cmd.outbox_len as usize]
                         .iter_mut()

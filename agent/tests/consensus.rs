@@ -2,9 +2,10 @@
 //! frames stay within their budgets, a knocked-down robot decides nothing.
 
 use swarmrt_agent::Agent;
-use swarmrt_protocol::config::Config;
-use swarmrt_protocol::consensus::{ConsensusMsg, ConsensusNote, Item, Role};
-use swarmrt_protocol::{BROADCAST, MAX_REPORT, Neighbour, Note, Observation, RadioMsg, RobotState};
+use swarmrt_agent::consensus::{ConsensusMsg, ConsensusNote, Item, Role};
+use swarmrt_agent::{Note, RadioMsg};
+use swarmrt_protocol::{BROADCAST, MAX_REPORT, Neighbour, Observation, RobotState};
+use swarmrt_scenario::Config;
 
 fn config(extra: &str) -> Config {
     Config::from_toml_str(

@@ -3,7 +3,7 @@
 
 use swarmrt_agent::behaviours::formation::direction::{self, Dir, Seen};
 use swarmrt_agent::behaviours::formation::observers::{self, Observers, Placed, to_leader_frame};
-use swarmrt_protocol::rng;
+use swarmrt_scenario::rng;
 
 /// Half a robot width: differences below it count as equal.
 const TOL: f64 = 0.15;

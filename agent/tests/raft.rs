@@ -4,9 +4,9 @@
 use std::collections::BTreeSet;
 
 use swarmrt_agent::consensus::raft::{Persistent, Proposed, Raft, RaftParams};
+use swarmrt_agent::consensus::{ConsensusMsg, ConsensusNote, Decision, Entry, Item, Role};
 use swarmrt_agent::consensus::{NOTE_BUDGET, Notes, stream};
 use swarmrt_protocol::BROADCAST;
-use swarmrt_protocol::consensus::{ConsensusMsg, ConsensusNote, Decision, Entry, Item, Role};
 
 struct Net {
     nodes: Vec<Raft>,

@@ -24,8 +24,7 @@
 use std::collections::BTreeMap;
 
 use serde_json::{Value, json};
-use swarmrt_protocol::Note;
-use swarmrt_protocol::consensus::{ConsensusNote, Decision, Role, SentCounts};
+use swarmrt_agent::consensus::{ConsensusNote, Decision, Role, SentCounts};
 
 /// A broken property.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -544,9 +543,10 @@ impl Checker {
             let robot = v["robot"].as_u64().unwrap_or(0) as u32;
             match v["event"].as_str() {
                 Some("note") => {
-                    let note: Note = serde_json::from_value(v["note"].clone())
-                        .map_err(|e| format!("events.jsonl line {}: note: {e}", n + 1))?;
-                    if let Note::Consensus(cn) = note {
+                    // Consensus notes are recorded as `{"consensus": {...}}`.
+                    if let Some(cn) = v["note"].get("consensus") {
+                        let cn: ConsensusNote = serde_json::from_value(cn.clone())
+                            .map_err(|e| format!("events.jsonl line {}: note: {e}", n + 1))?;
                         c.note(t, robot, &cn);
                     }
                 }
@@ -898,7 +898,7 @@ mod tests {
         let push = |lines: &mut String, t: u64, r: u32, n: N| {
             lines.push_str(
                 &serde_json::to_string(&json!({
-                    "event": "note", "tick": t, "robot": r, "note": Note::Consensus(n)
+                    "event": "note", "tick": t, "robot": r, "note": {"consensus": n}
                 }))
                 .unwrap(),
             );

@@ -28,8 +28,8 @@ impl SwarmError {
     }
 }
 
-impl From<swarmrt_protocol::config::ConfigError> for SwarmError {
-    fn from(e: swarmrt_protocol::config::ConfigError) -> Self {
+impl From<swarmrt_scenario::ConfigError> for SwarmError {
+    fn from(e: swarmrt_scenario::ConfigError) -> Self {
         SwarmError::User(e.to_string())
     }
 }

@@ -4,8 +4,8 @@
 use std::path::Path;
 
 use swarmrt_agent::Agent;
-use swarmrt_protocol::config::Config;
 use swarmrt_protocol::{Observation, RobotState};
+use swarmrt_scenario::Config;
 use swarmrt_world::records::Recorder;
 use swarmrt_world::{ProcessSignal, World, WorldMetrics};
 
@@ -18,7 +18,8 @@ pub fn run(
     interrupt: &crossbeam_channel::Receiver<()>,
     mut progress: impl FnMut(u64),
 ) -> anyhow::Result<(WorldMetrics, bool)> {
-    let mut world = World::new(cfg).map_err(|e| anyhow::anyhow!("{}: {}", e.key, e.message))?;
+    let mut world = World::new(cfg, swarmrt_agent::registry::VOCABULARY)
+        .map_err(|e| anyhow::anyhow!("{}: {}", e.key, e.message))?;
     let n = cfg.robots.count as usize;
     let mut agents: Vec<Agent> = (0..n as u32).map(|id| Agent::new(cfg, id)).collect();
     let mut recorder = Recorder::create(dir)?;

@@ -6,6 +6,7 @@ pub mod bench;
 pub mod cleanup;
 pub mod cli;
 pub mod commands;
+pub mod config;
 pub mod consensus_check;
 pub mod error;
 pub mod fuzz;

@@ -7,7 +7,7 @@ use swarmrt_orchestrator::error::SwarmError;
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    swarmrt_protocol::logging::init();
+    swarmrt_scenario::process::init_logging();
     if let Cmd::Bench(commands::bench::BenchCmd::Child(args)) = &cli.command {
         // Benchmark children keep the default SIGTERM/SIGINT actions (no Ctrl-C handler).
         return commands::bench::child(args);

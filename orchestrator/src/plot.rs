@@ -11,7 +11,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use swarmrt_protocol::RobotState;
-use swarmrt_protocol::config::Config;
+use swarmrt_scenario::Config;
 
 /// One robot's path for the plot.
 #[derive(Debug, Clone, PartialEq)]
@@ -600,7 +600,7 @@ pub fn write_trajectory_plots(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use swarmrt_protocol::config::{CircleObstacle, PolygonObstacle, RectObstacle};
+    use swarmrt_scenario::{CircleObstacle, PolygonObstacle, RectObstacle};
 
     /// A small scenario with one obstacle of each kind.
     fn config(bounds: [f64; 4]) -> Config {

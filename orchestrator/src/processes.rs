@@ -15,9 +15,9 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use crossbeam_channel::{Receiver, Sender};
-use swarmrt_protocol::config::Config;
 use swarmrt_protocol::control::{Control, Report};
 use swarmrt_protocol::services::RunServices;
+use swarmrt_scenario::Config;
 
 use crate::cleanup;
 

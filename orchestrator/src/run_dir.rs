@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use swarmrt_protocol::RobotState;
-use swarmrt_protocol::config::Config;
+use swarmrt_scenario::Config;
 
 use crate::plot::{RobotTrack, write_trajectory_plots};
 

@@ -4,7 +4,6 @@
 //! instead of misread. Bounded collections are fixed arrays with a length field: shared memory
 //! holds no pointers.
 
-use crate::MAX_REPORT;
 use iceoryx2::prelude::*;
 
 /// Bumped whenever the layout or meaning of a message changes.
@@ -19,6 +18,8 @@ pub const MAX_INBOX: usize = 32;
 pub const MAX_LIDAR_RAYS: usize = 64;
 /// Most neighbours reported by the range-and-bearing sensor (nearest first).
 pub const MAX_NEIGHBOURS: usize = 32;
+/// Bytes a robot may report per tick (its notes for the run record).
+pub const MAX_REPORT: usize = 256;
 /// Destination id of a broadcast frame.
 pub const BROADCAST: u32 = u32::MAX;
 
@@ -269,7 +270,8 @@ pub struct Command {
     pub outbox: [Frame; MAX_OUTBOX],
     /// Number of valid bytes in `report`.
     pub report_len: u16,
-    /// The robot's own notes for the run record: a postcard-encoded `Vec<`[`crate::Note`]`>`
+    /// The robot's own notes for the run record: a postcard-encoded `Vec` of the robots'
+    /// note type (`swarmrt_agent::Note`)
     /// (empty when `report_len` is 0). The world checks and logs them; it never acts on them.
     pub report: [u8; MAX_REPORT],
 }
@@ -317,7 +319,7 @@ impl Command {
     }
 
     /// Encodes `msg` with postcard and queues it for `dst`.
-    pub fn push_frame(&mut self, dst: u32, msg: &crate::RadioMsg) -> Result<(), PushError> {
+    pub fn push_frame<M: serde::Serialize>(&mut self, dst: u32, msg: &M) -> Result<(), PushError> {
         let slot = self.outbox_len as usize;
         if slot >= MAX_OUTBOX {
             return Err(PushError::OutboxFull);
@@ -338,7 +340,7 @@ impl Command {
 
 impl Command {
     /// Encodes `notes` into the report (replacing any earlier report).
-    pub fn set_notes(&mut self, notes: &[crate::Note]) -> Result<(), PushError> {
+    pub fn set_notes<N: serde::Serialize>(&mut self, notes: &[N]) -> Result<(), PushError> {
         if notes.is_empty() {
             self.report_len = 0;
             return Ok(());
@@ -351,44 +353,45 @@ impl Command {
     }
 
     /// Decodes the report: `Ok(empty)` when there is none, `Err` when it is malformed.
-    pub fn notes(&self) -> Result<Vec<crate::Note>, &'static str> {
-        let len = self.report_len as usize;
-        if len == 0 {
+    pub fn notes<N: serde::de::DeserializeOwned>(&self) -> Result<Vec<N>, &'static str> {
+        let report = self.report()?;
+        if report.is_empty() {
             return Ok(Vec::new());
         }
+        postcard::from_bytes(report).map_err(|_| "malformed report")
+    }
+
+    /// The report's bytes, `Err` when its length is out of range.
+    pub fn report(&self) -> Result<&[u8], &'static str> {
+        let len = self.report_len as usize;
         if len > MAX_REPORT {
             return Err("report length out of range");
         }
-        postcard::from_bytes(&self.report[..len]).map_err(|_| "malformed report")
+        Ok(&self.report[..len])
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::RadioMsg;
 
     #[test]
     fn notes_round_trip_and_garbage_is_refused() {
         let mut cmd = Command::act(1, 0);
-        assert_eq!(cmd.notes(), Ok(vec![]));
-        let notes = vec![crate::Note::EpsilonFlip, crate::Note::Role { role: 2 }];
+        assert_eq!(cmd.notes::<(u8, i8)>(), Ok(vec![]));
+        let notes = vec![(1u8, -1i8), (2, 0)];
         cmd.set_notes(&notes).unwrap();
         assert_eq!(cmd.notes(), Ok(notes));
         cmd.report[0] = 200;
-        assert!(cmd.notes().is_err());
+        assert!(cmd.notes::<(u8, i8)>().is_err());
         cmd.report_len = MAX_REPORT as u16 + 1;
-        assert_eq!(cmd.notes(), Err("report length out of range"));
+        assert_eq!(cmd.notes::<(u8, i8)>(), Err("report length out of range"));
     }
 
     #[test]
     fn outbox_refuses_the_ninth_frame() {
         let mut cmd = Command::act(0, 0);
-        let msg = RadioMsg::Beacon {
-            x: 0.0,
-            y: 0.0,
-            theta: 0.0,
-        };
+        let msg = (0.0f64, 0.0f64, 0.0f64);
         for _ in 0..MAX_OUTBOX {
             cmd.push_frame(BROADCAST, &msg).unwrap();
         }

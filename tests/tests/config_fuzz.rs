@@ -2,10 +2,10 @@
 //! builds its world or is refused with a key, and `swarm check` / `swarm run` on mutated
 //! configs exit 0 or 2, never 1, never a panic or a signal, with one line naming the file.
 //!
-//! The mutations are those of `protocol/tests/config_fuzz.rs`, from a fixed seed; explore
+//! The mutations are those of `agent/tests/config_fuzz.rs`, from a fixed seed; explore
 //! further with `PROPTEST_CASES` and `PROPTEST_RNG_SEED`.
 
-#[path = "../../protocol/tests/common/mutate.rs"]
+#[path = "../../agent/tests/common/mutate.rs"]
 mod mutate;
 
 use std::path::Path;
@@ -14,7 +14,7 @@ use std::time::Duration;
 
 use mutate::{geometry_override, mutated_config, override_arg, renumbered_config, runner};
 use proptest::prelude::*;
-use swarmrt_protocol::config::Config;
+use swarmrt_agent::registry;
 use swarmrt_tests::swarm;
 use swarmrt_world::World;
 
@@ -31,8 +31,8 @@ proptest! {
         (_name, text, _ms) in mutated_config(),
         overrides in prop::collection::vec(override_arg(), 0..2),
     ) {
-        if let Ok(cfg) = Config::from_toml_str("fuzz.toml", &text, &overrides)
-            && let Err(e) = World::new(&cfg)
+        if let Ok(cfg) = registry::from_toml_str("fuzz.toml", &text, &overrides)
+            && let Err(e) = World::new(&cfg, registry::VOCABULARY)
         {
             prop_assert!(!e.key.is_empty(), "{e:?}");
             prop_assert!(
@@ -53,8 +53,8 @@ proptest! {
         (_name, text) in prop::sample::select(mutate::real_configs()),
         overrides in prop::collection::vec(geometry_override(), 1..4),
     ) {
-        if let Ok(cfg) = Config::from_toml_str("fuzz.toml", &text, &overrides)
-            && let Err(e) = World::new(&cfg)
+        if let Ok(cfg) = registry::from_toml_str("fuzz.toml", &text, &overrides)
+            && let Err(e) = World::new(&cfg, registry::VOCABULARY)
         {
             prop_assert!(!e.key.is_empty(), "{e:?}");
         }

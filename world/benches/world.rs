@@ -11,8 +11,10 @@ use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use swarmrt_protocol::config::Config;
-use swarmrt_protocol::{BROADCAST, Command, Frame, Observation, RadioMsg};
+use swarmrt_agent::RadioMsg;
+use swarmrt_agent::behaviours::goto::Beacon;
+use swarmrt_protocol::{BROADCAST, Command, Frame, Observation, Vocabulary};
+use swarmrt_scenario::Config;
 use swarmrt_world::World;
 use swarmrt_world::map::Map;
 use swarmrt_world::radio::RadioMedium;
@@ -46,11 +48,11 @@ fn commands(world: &World, out: &mut Vec<Option<Command>>) {
         c.omega = 0.5;
         c.lidar_on = 1;
         if (tick + r.id as u64).is_multiple_of(BEACON_PERIOD) {
-            let beacon = RadioMsg::Beacon {
+            let beacon = RadioMsg::Goto(Beacon {
                 x: r.x,
                 y: r.y,
                 theta: r.theta,
-            };
+            });
             c.push_frame(BROADCAST, &beacon).expect("a beacon fits");
         }
         out.push(Some(c));
@@ -59,7 +61,7 @@ fn commands(world: &World, out: &mut Vec<Option<Command>>) {
 
 /// A world at N robots after 10 warm-up ticks, with its observation buffer.
 fn warm_world(n: u32) -> (World, Vec<Observation>, Vec<Option<Command>>) {
-    let mut world = World::new(&scenario(n)).expect("bench world");
+    let mut world = World::new(&scenario(n), Vocabulary::ANY).expect("bench world");
     let mut obs = vec![Observation::empty(0, 0); n as usize];
     let mut cmds = Vec::new();
     for _ in 0..10 {

@@ -20,19 +20,22 @@ struct Args {
 }
 
 /// Entry point of the process (the `swarm-world` binary in the orchestrator package).
-pub fn main() -> std::process::ExitCode {
+///
+/// `vocabulary` is the robots' (the binary passes `swarmrt_agent::registry::VOCABULARY`; the
+/// world crate does not depend on any behaviour).
+pub fn main(vocabulary: swarmrt_protocol::Vocabulary) -> std::process::ExitCode {
     let args = Args::parse();
-    swarmrt_protocol::logging::init();
+    swarmrt_scenario::process::init_logging();
     let span = tracing::info_span!("world", run_id = %args.run_id);
     let _enter = span.enter();
-    let (run, cfg) = match swarmrt_protocol::child::load_run(&args.run_id, &args.config) {
+    let (run, cfg) = match swarmrt_scenario::process::load_run(&args.run_id, &args.config) {
         Ok(x) => x,
         Err(e) => {
             tracing::error!("{e}");
             return std::process::ExitCode::from(2);
         }
     };
-    match shell::run(&run, &cfg, &args.out) {
+    match shell::run(&run, &cfg, &args.out, vocabulary) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             tracing::error!("world failed: {e}");

@@ -4,7 +4,8 @@
 //! moves its observations and commands through iceoryx2.
 //!
 //! ```
-//! use swarmrt_protocol::{config::Config, Command, Observation};
+//! use swarmrt_protocol::{Command, Observation, Vocabulary};
+//! use swarmrt_scenario::Config;
 //! use swarmrt_world::World;
 //!
 //! let cfg = Config::from_toml_str("doc.toml", r#"
@@ -17,7 +18,7 @@
 //!     [robots]
 //!     count = 2
 //! "#, &[]).unwrap();
-//! let mut world = World::new(&cfg).unwrap();
+//! let mut world = World::new(&cfg, Vocabulary::ANY).unwrap();
 //! let mut obs = vec![Observation::empty(0, 0); 2];
 //! while !world.finished() {
 //!     world.observe(&mut obs);

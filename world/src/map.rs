@@ -7,7 +7,7 @@
 use nalgebra::{Isometry2, Point2, Vector2};
 use parry2d_f64::query::{PointQuery, Ray, RayCast};
 use parry2d_f64::shape::{Compound, ConvexPolygon, SharedShape};
-use swarmrt_protocol::config::MapConfig;
+use swarmrt_scenario::MapConfig;
 
 /// Thickness of the walls placed just outside the map bounds.
 const WALL: f64 = 1.0;
@@ -104,7 +104,7 @@ impl Map {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use swarmrt_protocol::config::{CircleObstacle, Goal, PolygonObstacle, RectObstacle};
+    use swarmrt_scenario::{CircleObstacle, Goal, PolygonObstacle, RectObstacle};
 
     fn map() -> Map {
         Map::build(&MapConfig {

@@ -60,8 +60,8 @@ use std::cmp::Ordering;
 use std::collections::{BTreeSet, BinaryHeap, HashMap};
 
 use rand::Rng as _;
-use swarmrt_protocol::config::{LossModel, RadioConfig};
 use swarmrt_protocol::{BROADCAST, Frame, MAX_INBOX};
+use swarmrt_scenario::{LossModel, RadioConfig};
 
 use crate::rng::{self, Rng};
 

@@ -1,3 +1,3 @@
-//! Seeded random streams; defined in the protocol crate so robots draw the same way.
+//! Seeded random streams; defined in the scenario crate so robots draw the same way.
 
-pub use swarmrt_protocol::rng::*;
+pub use swarmrt_scenario::rng::*;

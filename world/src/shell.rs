@@ -12,13 +12,13 @@ use iceoryx2::identifiers::UniquePublisherId;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
-use swarmrt_protocol::config::Config;
 use swarmrt_protocol::control::{Control, Report};
 use swarmrt_protocol::ipc::{self, IpcError};
 use swarmrt_protocol::services::{EVENT_CONTROL, RunServices};
 use swarmrt_protocol::{
     Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION, RobotState,
 };
+use swarmrt_scenario::Config;
 
 use crate::records::Recorder;
 use crate::timing::{TickPhases, TickTimer, TickTiming};
@@ -111,9 +111,14 @@ fn spawn_control_thread(run: RunServices) -> Receiver<Control> {
 }
 
 /// Runs the world of `run` with `cfg`, writing records into `out_dir`.
-pub fn run(run: &RunServices, cfg: &Config, out_dir: &Path) -> Result<(), IpcError> {
+pub fn run(
+    run: &RunServices,
+    cfg: &Config,
+    out_dir: &Path,
+    vocabulary: swarmrt_protocol::Vocabulary,
+) -> Result<(), IpcError> {
     let n = cfg.robots.count as usize;
-    let mut world = World::new(cfg).map_err(|e| format!("{}: {}", e.key, e.message))?;
+    let mut world = World::new(cfg, vocabulary).map_err(|e| format!("{}: {}", e.key, e.message))?;
     let mut recorder = Recorder::create(out_dir)?;
 
     match ipc::raise_fd_limit() {

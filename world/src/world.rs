@@ -6,13 +6,13 @@ use rand::Rng as _;
 use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 use std::collections::BTreeSet;
-use std::f64::consts::PI;
-use swarmrt_protocol::config::Config;
-use swarmrt_protocol::faults::FaultTarget;
 use swarmrt_protocol::{
     BROADCAST, Command, CommandKind, Frame, MAX_INBOX, MAX_LIDAR_RAYS, MAX_NEIGHBOURS, MAX_OUTBOX,
-    MAX_PAYLOAD, Neighbour, Note, Observation, PROTOCOL_VERSION, RadioMsg, RobotState,
+    MAX_PAYLOAD, Neighbour, NoteJson, Observation, PROTOCOL_VERSION, RobotState, Vocabulary,
 };
+use swarmrt_scenario::Config;
+use swarmrt_scenario::faults::FaultTarget;
+pub use swarmrt_scenario::wrap_angle;
 
 use crate::grid::Grid;
 use crate::map::{Map, MapError};
@@ -94,8 +94,8 @@ pub enum Event {
         tick: u64,
         /// The robot.
         robot: u32,
-        /// What it said.
-        note: Note,
+        /// What it said, as the robots' vocabulary renders it.
+        note: NoteJson,
     },
     /// A robot sent a command the world refused (logged once per robot and reason).
     Rejected {
@@ -138,6 +138,8 @@ pub struct WorldMetrics {
 /// The world of one run.
 pub struct World {
     cfg: Config,
+    /// What the robots may say: checks radio payloads, renders notes for the record.
+    vocabulary: Vocabulary,
     map: Map,
     robots: Vec<Robot>,
     radio: RadioMedium,
@@ -189,20 +191,11 @@ struct Outage {
     resume: RobotState,
 }
 
-/// Wraps an angle into (-pi, pi].
-pub fn wrap_angle(a: f64) -> f64 {
-    let mut a = a % (2.0 * PI);
-    if a <= -PI {
-        a += 2.0 * PI;
-    } else if a > PI {
-        a -= 2.0 * PI;
-    }
-    a
-}
-
 impl World {
-    /// Builds the world at tick 0 with every robot at its start position.
-    pub fn new(cfg: &Config) -> Result<World, MapError> {
+    /// Builds the world at tick 0 with every robot at its start position. `vocabulary` is
+    /// the robots' (`swarmrt_agent::registry::VOCABULARY`), or [`Vocabulary::ANY`] for a world
+    /// driven without robots.
+    pub fn new(cfg: &Config, vocabulary: Vocabulary) -> Result<World, MapError> {
         let map = Map::build(&cfg.map)?;
         let seed = cfg.scenario.seed;
         let heading = wrap_angle(cfg.start_heading());
@@ -235,6 +228,7 @@ impl World {
         let n = robots.len();
         let mut world = World {
             cfg: cfg.clone(),
+            vocabulary,
             map,
             radio: RadioMedium::new(cfg.radio, seed, n),
             tick: 0,
@@ -425,7 +419,7 @@ impl World {
         if cmd.outbox_len as usize > MAX_OUTBOX {
             return Err("outbox length out of range");
         }
-        cmd.notes()?;
+        (self.vocabulary.read_notes)(cmd.report()?)?;
         for f in cmd.outbox() {
             if f.len as usize > MAX_PAYLOAD {
                 return Err("oversized radio frame");
@@ -435,7 +429,7 @@ impl World {
             }
             // The world routes bytes, but bytes no robot could read are refused at the
             // boundary rather than delivered as noise.
-            if RadioMsg::decode(f.bytes()).is_none() {
+            if !(self.vocabulary.check_frame)(f.bytes()) {
                 return Err("malformed radio frame");
             }
         }
@@ -463,14 +457,15 @@ impl World {
                     Ok(()) => {
                         accepted[i] = Some(cmd);
                         // validate() decoded it once already; this cannot fail.
-                        for note in cmd.notes().unwrap_or_default() {
-                            if note.claims_leadership() {
+                        let report = cmd.report().unwrap_or_default();
+                        for note in (self.vocabulary.read_notes)(report).unwrap_or_default() {
+                            if note.claims_leadership {
                                 self.leader = Some(i as u32);
                             }
                             self.events.push(Event::Note {
                                 tick,
                                 robot: i as u32,
-                                note,
+                                note: note.json,
                             });
                         }
                     }
@@ -807,13 +802,13 @@ struct ObserveCtx<'a> {
     grid: &'a Grid,
     inboxes: &'a [Vec<Frame>],
     tick: u64,
-    lidar: swarmrt_protocol::config::LidarConfig,
+    lidar: swarmrt_scenario::LidarConfig,
     rb_range: f64,
     radius: f64,
     reach: f64,
-    noise: swarmrt_protocol::config::NoiseConfig,
-    goal: swarmrt_protocol::config::Goal,
-    goal_sensor: swarmrt_protocol::config::GoalSensorConfig,
+    noise: swarmrt_scenario::NoiseConfig,
+    goal: swarmrt_scenario::Goal,
+    goal_sensor: swarmrt_scenario::GoalSensorConfig,
 }
 
 impl ObserveCtx<'_> {

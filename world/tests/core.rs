@@ -2,16 +2,20 @@
 //! validation and determinism.
 
 use std::f64::consts::PI;
-use swarmrt_protocol::config::Config;
-use swarmrt_protocol::{BROADCAST, Command, MAX_OUTBOX, Note, Observation, RadioMsg, RobotState};
+use swarmrt_agent::behaviours::formation::FormationNote;
+use swarmrt_agent::behaviours::goto::Beacon;
+use swarmrt_agent::registry::VOCABULARY;
+use swarmrt_agent::{Note, RadioMsg};
+use swarmrt_protocol::{BROADCAST, Command, MAX_OUTBOX, NoteJson, Observation, RobotState};
+use swarmrt_scenario::Config;
 use swarmrt_world::{Event, World};
 
 /// A message to fill outboxes with.
-const BEACON: RadioMsg = RadioMsg::Beacon {
+const BEACON: RadioMsg = RadioMsg::Goto(Beacon {
     x: 0.0,
     y: 0.0,
     theta: 0.0,
-};
+});
 
 /// One robot at (2, 2) facing +x, a circle at (6, 2), walls at 0 and 10.
 fn config(extra: &[&str]) -> Config {
@@ -57,7 +61,7 @@ fn drive(world: &mut World, v: f64, omega: f64, ticks: usize) {
 
 #[test]
 fn unicycle_moves_straight_and_turns() {
-    let mut w = World::new(&config(&[])).unwrap();
+    let mut w = World::new(&config(&[]), VOCABULARY).unwrap();
     drive(&mut w, 1.0, 0.0, 10);
     let r = &w.robots()[0];
     assert!(
@@ -77,7 +81,7 @@ fn unicycle_moves_straight_and_turns() {
 
 #[test]
 fn out_of_range_speed_is_rejected_not_clamped() {
-    let mut w = World::new(&config(&[])).unwrap();
+    let mut w = World::new(&config(&[]), VOCABULARY).unwrap();
     drive(&mut w, 5.0, 0.0, 3);
     assert_eq!(w.robots()[0].x, 2.0, "a refused command means stop");
     assert_eq!(w.metrics().rejected, 3);
@@ -92,7 +96,7 @@ fn out_of_range_speed_is_rejected_not_clamped() {
 
 #[test]
 fn nan_wrong_version_wrong_tick_and_bad_frames_are_rejected() {
-    let w = World::new(&config(&[])).unwrap();
+    let w = World::new(&config(&[]), VOCABULARY).unwrap();
     let good = Command::act(0, 0);
     assert_eq!(w.validate(0, &good), Ok(()));
     let mut c = good;
@@ -123,7 +127,8 @@ fn nan_wrong_version_wrong_tick_and_bad_frames_are_rejected() {
         Err("robot id does not match its slot")
     );
     let mut c = good;
-    c.set_notes(&[Note::EpsilonFlip]).unwrap();
+    c.set_notes(&[Note::Formation(FormationNote::EpsilonFlip)])
+        .unwrap();
     c.report[0] = 250;
     assert_eq!(w.validate(0, &c), Err("malformed report"));
     let mut c = good;
@@ -133,12 +138,15 @@ fn nan_wrong_version_wrong_tick_and_bad_frames_are_rejected() {
 
 #[test]
 fn notes_are_recorded_as_events_of_their_tick() {
-    let mut w = World::new(&config(&[])).unwrap();
+    let mut w = World::new(&config(&[]), VOCABULARY).unwrap();
     let mut obs = vec![Observation::empty(0, 0); 1];
     w.observe(&mut obs);
     let mut c = Command::act(0, 0);
-    c.set_notes(&[Note::Role { role: 2 }, Note::EpsilonFlip])
-        .unwrap();
+    c.set_notes(&[
+        Note::Formation(FormationNote::Role { role: 2 }),
+        Note::Formation(FormationNote::EpsilonFlip),
+    ])
+    .unwrap();
     w.step(&[Some(c)]);
     let notes: Vec<_> = w
         .drain_events()
@@ -151,12 +159,12 @@ fn notes_are_recorded_as_events_of_their_tick() {
             Event::Note {
                 tick: 0,
                 robot: 0,
-                note: Note::Role { role: 2 }
+                note: NoteJson::new(r#"{"role":{"role":2}}"#.into()).unwrap()
             },
             Event::Note {
                 tick: 0,
                 robot: 0,
-                note: Note::EpsilonFlip
+                note: NoteJson::new(r#""epsilon_flip""#.into()).unwrap()
             },
         ]
     );
@@ -164,7 +172,7 @@ fn notes_are_recorded_as_events_of_their_tick() {
 
 #[test]
 fn hitting_an_obstacle_knocks_the_robot_down_where_it_stands() {
-    let mut w = World::new(&config(&[])).unwrap();
+    let mut w = World::new(&config(&[]), VOCABULARY).unwrap();
     // Surface of the circle is at x = 5; the robot's edge touches at x = 4.8.
     drive(&mut w, 2.0, 0.0, 30);
     let r = w.robots()[0].clone();
@@ -185,15 +193,13 @@ fn hitting_an_obstacle_knocks_the_robot_down_where_it_stands() {
 fn fast_robot_does_not_tunnel_through_a_thin_wall() {
     let mut cfg = config(&["robots.max_speed=100.0"]);
     cfg.map.circles.clear();
-    cfg.map
-        .rectangles
-        .push(swarmrt_protocol::config::RectObstacle {
-            x_min: 4.0,
-            y_min: 0.5,
-            x_max: 4.05,
-            y_max: 3.5,
-        });
-    let mut w = World::new(&cfg).unwrap();
+    cfg.map.rectangles.push(swarmrt_scenario::RectObstacle {
+        x_min: 4.0,
+        y_min: 0.5,
+        x_max: 4.05,
+        y_max: 3.5,
+    });
+    let mut w = World::new(&cfg, VOCABULARY).unwrap();
     drive(&mut w, 50.0, 0.0, 1); // 5 m in one tick
     assert_eq!(w.robots()[0].state, RobotState::Down);
     assert!(w.robots()[0].x < 4.0);
@@ -205,7 +211,7 @@ fn robots_colliding_both_go_down() {
         "robots.count=2",
         "robots.start={ x = 2.5, y = 6.0, spacing = 1.0, heading_deg = -90.0 }",
     ]);
-    let mut w = World::new(&cfg).unwrap();
+    let mut w = World::new(&cfg, VOCABULARY).unwrap();
     assert_eq!(
         (w.robots()[1].x, w.robots()[1].y),
         (2.5, 5.0),
@@ -234,7 +240,7 @@ fn robots_colliding_both_go_down() {
 
 #[test]
 fn lidar_measures_known_distances() {
-    let mut w = World::new(&config(&[])).unwrap();
+    let mut w = World::new(&config(&[]), VOCABULARY).unwrap();
     let mut obs = vec![Observation::empty(0, 0)];
     w.observe(&mut obs);
     let l = obs[0].lidar();
@@ -247,7 +253,7 @@ fn lidar_measures_known_distances() {
 
 #[test]
 fn lidar_off_reports_nothing_and_costs_nothing() {
-    let mut w = World::new(&config(&[])).unwrap();
+    let mut w = World::new(&config(&[]), VOCABULARY).unwrap();
     let mut obs = vec![Observation::empty(0, 0)];
     w.observe(&mut obs);
     assert_eq!(w.metrics().lidar_on_ticks, 1, "on at start");
@@ -263,7 +269,7 @@ fn lidar_sees_other_robots() {
         "robots.count=2",
         "robots.start={ x = 2.5, y = 6.0, spacing = 2.0, heading_deg = -90.0 }",
     ]);
-    let mut w = World::new(&cfg).unwrap();
+    let mut w = World::new(&cfg, VOCABULARY).unwrap();
     let mut obs = vec![Observation::empty(0, 0); 2];
     w.observe(&mut obs);
     // Robot 1 is 2 m ahead (south) of robot 0; its body starts 0.2 m earlier.
@@ -280,7 +286,7 @@ fn range_and_bearing_and_goal_sensor() {
         "robots.count=2",
         "robots.start={ x = 2.5, y = 6.0, spacing = 2.0, heading_deg = 0.0 }",
     ]);
-    let mut w = World::new(&cfg).unwrap();
+    let mut w = World::new(&cfg, VOCABULARY).unwrap();
     let mut obs = vec![Observation::empty(0, 0); 2];
     w.observe(&mut obs);
     let n = obs[0].neighbours();
@@ -294,7 +300,7 @@ fn range_and_bearing_and_goal_sensor() {
     assert!((obs[0].goal_range - (dx * dx + dy * dy).sqrt()).abs() < 1e-9);
     // A narrow forward camera cannot see a goal off to the side.
     let cfg = config(&["robots.goal_sensor={ range = 100.0, fov_deg = 10.0 }"]);
-    let mut w = World::new(&cfg).unwrap();
+    let mut w = World::new(&cfg, VOCABULARY).unwrap();
     let mut obs = vec![Observation::empty(0, 0)];
     w.observe(&mut obs);
     assert_eq!(obs[0].goal_visible, 0);
@@ -306,17 +312,17 @@ fn radio_frames_arrive_with_the_next_observation() {
         "robots.count=2",
         "robots.start={ x = 2.5, y = 6.0, spacing = 2.0 }",
     ]);
-    let mut w = World::new(&cfg).unwrap();
+    let mut w = World::new(&cfg, VOCABULARY).unwrap();
     let mut obs = vec![Observation::empty(0, 0); 2];
     w.observe(&mut obs);
     let mut a = Command::act(0, 0);
     a.push_frame(
         BROADCAST,
-        &RadioMsg::Beacon {
+        &RadioMsg::Goto(Beacon {
             x: 1.0,
             y: 2.0,
             theta: 3.0,
-        },
+        }),
     )
     .unwrap();
     a.outbox[0].src = 99; // the world never trusts the sender's claim
@@ -327,11 +333,11 @@ fn radio_frames_arrive_with_the_next_observation() {
     assert_eq!(obs[0].inbox().len(), 0, "no echo to the sender");
     assert_eq!(
         RadioMsg::decode(obs[1].inbox()[0].bytes()),
-        Some(RadioMsg::Beacon {
+        Some(RadioMsg::Goto(Beacon {
             x: 1.0,
             y: 2.0,
             theta: 3.0
-        })
+        }))
     );
 }
 
@@ -341,7 +347,7 @@ fn dead_robot_stays_as_an_obstacle_and_is_not_waited_for() {
         "robots.count=2",
         "robots.start={ x = 2.5, y = 6.0, spacing = 2.0, heading_deg = -90.0 }",
     ]);
-    let mut w = World::new(&cfg).unwrap();
+    let mut w = World::new(&cfg, VOCABULARY).unwrap();
     w.mark_dead(1, "process killed by signal 9");
     w.mark_dead(1, "again");
     assert_eq!(w.metrics().dead, 1, "idempotent");
@@ -365,7 +371,7 @@ fn same_seed_same_run_with_noise_and_loss() {
             "radio.loss=0.3",
             &format!("scenario.seed={seed}"),
         ]);
-        let mut w = World::new(&cfg).unwrap();
+        let mut w = World::new(&cfg, VOCABULARY).unwrap();
         let mut obs = vec![Observation::empty(0, 0); 4];
         let mut trace = Vec::new();
         for _ in 0..50 {
@@ -399,7 +405,7 @@ fn start_layout_follows_the_count_and_avoids_obstacles() {
         "robots.count=60",
         "robots.start={ x = 6.0, y = 2.0, spacing = 0.5 }",
     ]);
-    let w = World::new(&cfg).unwrap();
+    let w = World::new(&cfg, VOCABULARY).unwrap();
     let r = w.robots();
     assert_eq!(r.len(), 60);
     for a in r {

@@ -1,8 +1,9 @@
 //! The fault schedule in the world core: freezes, restarts, kills and random faults take
 //! effect at exactly their tick boundary and hand the shell the signals to send.
 
-use swarmrt_protocol::config::Config;
+use swarmrt_agent::registry::VOCABULARY;
 use swarmrt_protocol::{Command, Observation, RobotState};
+use swarmrt_scenario::Config;
 use swarmrt_world::{Event, ProcessSignal, World};
 
 /// `count` robots in a row on an empty 20 x 20 map, plus `faults` (TOML text).
@@ -57,10 +58,10 @@ fn faults(events: &[Event]) -> Vec<(u64, String, Option<u32>)> {
 
 #[test]
 fn a_frozen_robot_stands_still_from_its_first_tick_and_resumes_at_the_last() {
-    let mut w = World::new(&config(
-        2,
-        "[[faults.freeze]]\nrobot = 1\nfrom = 5\nto = 10\n",
-    ))
+    let mut w = World::new(
+        &config(2, "[[faults.freeze]]\nrobot = 1\nfrom = 5\nto = 10\n"),
+        VOCABULARY,
+    )
     .unwrap();
     let mut signals = Vec::new();
     let mut xs = Vec::new();
@@ -97,11 +98,14 @@ fn a_frozen_robot_stands_still_from_its_first_tick_and_resumes_at_the_last() {
 
 #[test]
 fn a_restart_takes_the_robot_offline_and_brings_it_back_fresh() {
-    let mut w = World::new(&config(
-        3,
-        "[[faults.restart]]\ntick = 4\nrobot = 2\ndown_ticks = 3\n\
-         [[faults.restart]]\ntick = 20\nrobot = 2\n",
-    ))
+    let mut w = World::new(
+        &config(
+            3,
+            "[[faults.restart]]\ntick = 4\nrobot = 2\ndown_ticks = 3\n\
+             [[faults.restart]]\ntick = 20\nrobot = 2\n",
+        ),
+        VOCABULARY,
+    )
     .unwrap();
     let mut signals = Vec::new();
     let mut states = Vec::new();
@@ -143,14 +147,17 @@ fn a_restart_takes_the_robot_offline_and_brings_it_back_fresh() {
 
 #[test]
 fn a_kill_ends_a_freeze_and_a_dead_robot_is_neither_frozen_nor_restarted() {
-    let mut w = World::new(&config(
-        2,
-        "[[faults.freeze]]\nrobot = 0\nfrom = 2\nto = 10\n\
-         [[faults.kill]]\ntick = 5\nrobot = 0\n\
-         [[faults.restart]]\ntick = 6\nrobot = 0\n\
-         [[faults.freeze]]\nrobot = 0\nfrom = 7\nto = 8\n\
-         [[faults.freeze]]\nrobot = \"leader\"\nfrom = 3\nto = 4\n",
-    ))
+    let mut w = World::new(
+        &config(
+            2,
+            "[[faults.freeze]]\nrobot = 0\nfrom = 2\nto = 10\n\
+             [[faults.kill]]\ntick = 5\nrobot = 0\n\
+             [[faults.restart]]\ntick = 6\nrobot = 0\n\
+             [[faults.freeze]]\nrobot = 0\nfrom = 7\nto = 8\n\
+             [[faults.freeze]]\nrobot = \"leader\"\nfrom = 3\nto = 4\n",
+        ),
+        VOCABULARY,
+    )
     .unwrap();
     let mut signals = Vec::new();
     for _ in 0..12 {
@@ -178,10 +185,10 @@ fn a_kill_ends_a_freeze_and_a_dead_robot_is_neither_frozen_nor_restarted() {
 
 #[test]
 fn a_robot_down_before_a_freeze_is_down_after_it() {
-    let mut w = World::new(&config(
-        1,
-        "[[faults.freeze]]\nrobot = 0\nfrom = 80\nto = 85\n",
-    ))
+    let mut w = World::new(
+        &config(1, "[[faults.freeze]]\nrobot = 0\nfrom = 80\nto = 85\n"),
+        VOCABULARY,
+    )
     .unwrap();
     // Drive into the wall at x = 0.
     let mut obs = vec![Observation::empty(0, 0)];
@@ -210,7 +217,7 @@ fn random_faults_follow_the_seed_and_their_rate() {
             "[faults]\nkill_rate = 0.0005\nfreeze_rate = 0.01\nfreeze_ticks = 7\n",
         );
         cfg.scenario.seed = seed;
-        let mut w = World::new(&cfg).unwrap();
+        let mut w = World::new(&cfg, VOCABULARY).unwrap();
         let mut signals = Vec::new();
         let mut running = 0u64;
         for _ in 0..2000 {

@@ -1,8 +1,11 @@
 //! `World::observe` splits large swarms over threads: every thread count gives the same
 //! observations, tick after tick, with noise on (each robot draws from its own stream).
 
-use swarmrt_protocol::config::Config;
-use swarmrt_protocol::{BROADCAST, Command, Observation, RadioMsg};
+use swarmrt_agent::RadioMsg;
+use swarmrt_agent::behaviours::goto::Beacon;
+use swarmrt_agent::registry::VOCABULARY;
+use swarmrt_protocol::{BROADCAST, Command, Observation};
+use swarmrt_scenario::Config;
 use swarmrt_world::World;
 
 fn config() -> Config {
@@ -28,7 +31,7 @@ loss = 0.1
 
 fn run(threads: usize) -> Vec<Vec<Observation>> {
     let cfg = config();
-    let mut world = World::new(&cfg).unwrap();
+    let mut world = World::new(&cfg, VOCABULARY).unwrap();
     let n = cfg.robots.count as usize;
     let mut obs = vec![Observation::empty(0, 0); n];
     let mut seen = Vec::new();
@@ -43,11 +46,11 @@ fn run(threads: usize) -> Vec<Vec<Observation>> {
                 c.omega = 0.3;
                 c.lidar_on = (o.robot % 3 != 0) as u8;
                 if o.tick % 2 == 0 {
-                    let beacon = RadioMsg::Beacon {
+                    let beacon = RadioMsg::Goto(Beacon {
                         x: o.x,
                         y: o.y,
                         theta: o.theta,
-                    };
+                    });
                     c.push_frame(BROADCAST, &beacon).unwrap();
                 }
                 Some(c)

@@ -1,6 +1,6 @@
 //! The replicated log: entries at indexes 1, 2, ...; index 0 is the empty prefix (term 0).
 
-use swarmrt_protocol::consensus::{Entry, Item};
+use super::messages::{Entry, Item};
 
 /// A robot's copy of the log.
 #[derive(Debug, Clone, Default, PartialEq)]

@@ -17,7 +17,7 @@
 //! ```
 //! use swarmrt_agent::consensus::raft::{Proposed, Raft, RaftParams};
 //! use swarmrt_agent::consensus::{NOTE_BUDGET, Notes, stream};
-//! use swarmrt_protocol::consensus::{ConsensusNote, Decision, Role};
+//! use swarmrt_agent::consensus::{ConsensusNote, Decision, Role};
 //!
 //! let p = RaftParams { n: 1, election_min: 5, election_max: 10, heartbeat: 2,
 //!                      pre_vote: true, check_quorum: true };
@@ -35,22 +35,25 @@
 //! ```
 
 pub mod log;
+pub mod messages;
+pub mod notes;
 pub mod quadrant;
 pub mod raft;
 
 use rand::Rng as _;
-use swarmrt_protocol::config::Config;
-use swarmrt_protocol::consensus::{
-    Algorithm, ConsensusConfig, ConsensusNote, Decision, Item, SentCounts,
-};
-use swarmrt_protocol::{Command, MAX_REPORT, Note, Observation, RadioMsg};
+use swarmrt_protocol::{Command, MAX_REPORT, Observation};
+use swarmrt_scenario::Config;
+use swarmrt_scenario::consensus::{Algorithm, ConsensusConfig};
 
-use crate::agent::Decoded;
+use crate::inbox::Heard;
+use crate::registry::{Note, RadioMsg};
+pub use messages::{ConsensusMsg, Decision, Entry, Item};
+pub use notes::{ConsensusNote, Role, SentCounts};
 use quadrant::Quadrant;
 use raft::{Persistent, Raft, RaftParams};
 
 /// Every random draw of the cores comes from the run's shared seeded streams.
-pub use swarmrt_protocol::rng::{Rng, stream};
+pub use swarmrt_scenario::rng::{Rng, stream};
 
 /// Report bytes kept free for the behaviour's own notes.
 pub const BEHAVIOUR_NOTE_RESERVE: usize = 32;
@@ -214,7 +217,11 @@ impl Consensus {
         };
         Some(Consensus {
             core,
-            schedule: c.propose.iter().map(|p| (p.tick, p.decision())).collect(),
+            schedule: c
+                .propose
+                .iter()
+                .map(|p| (p.tick, Decision::from(p)))
+                .collect(),
             applied_ids: vec![false; c.propose.len()],
             notes: Notes::new(NOTE_BUDGET),
             boot,
@@ -254,7 +261,7 @@ impl Consensus {
 
     /// Feeds this tick's messages and the passage of time; returns the committed decisions
     /// to act on now, in log order.
-    pub fn step(&mut self, obs: &Observation, inbox: &[Decoded]) -> Vec<Decision> {
+    pub fn step(&mut self, obs: &Observation, inbox: &[Heard<ConsensusMsg>]) -> Vec<Decision> {
         self.tick = obs.tick;
         self.notes = Notes::new(NOTE_BUDGET);
         if let Some(b) = self.boot.take() {
@@ -270,9 +277,7 @@ impl Consensus {
                 let tick_bound = r.tick_bound();
                 self.notes.reserve(tick_bound);
                 for d in inbox {
-                    if let RadioMsg::Consensus(m) = &d.msg {
-                        r.step(d.src, m, &mut self.notes);
-                    }
+                    r.step(d.src, &d.msg, &mut self.notes);
                 }
                 self.notes.release(tick_bound);
                 r.tick(&mut self.notes);
@@ -296,9 +301,7 @@ impl Consensus {
             Core::Quadrant(q) => {
                 q.observe(obs.neighbours());
                 for d in inbox {
-                    if let RadioMsg::Consensus(m) = &d.msg {
-                        q.step(d.src, m);
-                    }
+                    q.step(d.src, &d.msg);
                 }
                 q.tick(obs.tick, &mut self.notes);
             }
@@ -308,8 +311,8 @@ impl Consensus {
     }
 
     /// Puts this tick's messages into the command's free frames (up to `radio.capacity`) and
-    /// this tick's notes into its report, after the behaviour's notes.
-    pub fn finish(&mut self, cmd: &mut Command) {
+    /// this tick's notes into its report, after the behaviour's `notes`.
+    pub fn finish(&mut self, cmd: &mut Command, mut all: Vec<Note>) {
         let budget = self.capacity.saturating_sub(cmd.outbox().len());
         let msgs = match &mut self.core {
             Core::Raft(r) => r.ready(budget),
@@ -329,9 +332,9 @@ impl Consensus {
         }
         let mine = self.notes.take();
         if mine.is_empty() {
+            let _ = cmd.set_notes(&all);
             return;
         }
-        let mut all = cmd.notes().unwrap_or_default();
         let theirs = all.len();
         all.extend(mine.iter().cloned().map(Note::Consensus));
         if cmd.set_notes(&all).is_err() {

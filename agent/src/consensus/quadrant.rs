@@ -18,7 +18,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::f64::consts::FRAC_PI_2;
 
-use swarmrt_protocol::consensus::{ConsensusMsg, ConsensusNote};
+use super::{ConsensusMsg, ConsensusNote};
 use swarmrt_protocol::{BROADCAST, Neighbour};
 
 use super::Notes;

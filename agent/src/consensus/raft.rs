@@ -18,8 +18,8 @@
 //!   message whose notes would not fit is left unprocessed, exactly as if the radio had lost
 //!   it, which Raft tolerates.
 
+use super::{ConsensusMsg, ConsensusNote, Decision, Entry, Item, Role};
 use rand::Rng as _;
-use swarmrt_protocol::consensus::{ConsensusMsg, ConsensusNote, Decision, Entry, Item, Role};
 use swarmrt_protocol::{BROADCAST, MAX_PAYLOAD};
 
 use super::log::Log;
@@ -935,7 +935,7 @@ fn coalesce(msgs: Vec<(u32, ConsensusMsg)>) -> Vec<(u32, ConsensusMsg)> {
     out
 }
 
-/// Whether `m` fits one radio frame inside [`swarmrt_protocol::RadioMsg::Consensus`] (whose
+/// Whether `m` fits one radio frame inside [`crate::RadioMsg::Consensus`] (whose
 /// variant tag takes one byte).
 pub fn fits_frame(m: &ConsensusMsg) -> bool {
     let mut buf = [0u8; MAX_PAYLOAD - 1];

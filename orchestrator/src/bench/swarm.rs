@@ -16,7 +16,7 @@ use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use swarmrt_agent::Agent;
 use swarmrt_protocol::Observation;
-use swarmrt_protocol::config::Config;
+use swarmrt_scenario::Config;
 use swarmrt_world::World;
 
 use super::child::{ChildMsg, ChildSpec};
@@ -166,7 +166,7 @@ pub fn scenario(base: &Path, n: u32, ticks: u64) -> SwarmResult<Config> {
         format!("map.goal.x={goal:.1}"),
         format!("map.goal.y={goal:.1}"),
     ];
-    crate::commands::run::load_config(base, &set)
+    crate::config::load_config(base, &set)
 }
 
 fn validate(args: &SwarmArgs) -> SwarmResult<()> {
@@ -190,11 +190,11 @@ fn validate(args: &SwarmArgs) -> SwarmResult<()> {
     if args
         .in_process_agents
         .iter()
-        .any(|&n| n == 0 || n > swarmrt_protocol::config::MAX_ROBOTS)
+        .any(|&n| n == 0 || n > swarmrt_scenario::MAX_ROBOTS)
     {
         return user(format!(
             "--in-process-agents: expected robot counts in 1..={}, got {:?}",
-            swarmrt_protocol::config::MAX_ROBOTS,
+            swarmrt_scenario::MAX_ROBOTS,
             args.in_process_agents
         ));
     }
@@ -449,7 +449,8 @@ fn process_cpu_secs() -> f64 {
 fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRow> {
     let n = cfg.robots.count as usize;
     let t = Instant::now();
-    let mut world = World::new(cfg).map_err(|e| anyhow::anyhow!("{}: {}", e.key, e.message))?;
+    let mut world = World::new(cfg, swarmrt_agent::registry::VOCABULARY)
+        .map_err(|e| anyhow::anyhow!("{}: {}", e.key, e.message))?;
     let mut agents: Vec<Agent> = (0..n as u32).map(|id| Agent::new(cfg, id)).collect();
     let setup_secs = t.elapsed().as_secs_f64();
     let mut obs = vec![Observation::empty(0, 0); n];

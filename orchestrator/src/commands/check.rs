@@ -1,7 +1,7 @@
 //! `swarm check`: validate a config (including building its map) and print it resolved.
 
 use crate::cli::CheckArgs;
-use crate::commands::run::load_config;
+use crate::config::load_config;
 use crate::error::SwarmResult;
 
 /// Prints the resolved config as TOML.

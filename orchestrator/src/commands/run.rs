@@ -6,25 +6,11 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
-use swarmrt_protocol::config::{Config, ConfigError};
-use swarmrt_world::World;
 
 use crate::cli::RunArgs;
+use crate::config::load_config;
 use crate::error::{SwarmError, SwarmResult};
 use crate::{in_process, processes, run_dir};
-
-/// Loads and validates a config, applying `--set` overrides, and builds its map once so a
-/// bad obstacle is a user error before any process starts.
-pub fn load_config(path: &Path, set: &[String]) -> SwarmResult<Config> {
-    let cfg = Config::load(path, set)?;
-    // Through ConfigError, so the line looks (and is escaped) like every other config error.
-    World::new(&cfg).map_err(|e| ConfigError {
-        file: path.display().to_string(),
-        key: e.key,
-        message: e.message,
-    })?;
-    Ok(cfg)
-}
 
 fn progress_bar(total: u64) -> ProgressBar {
     let pb = ProgressBar::with_draw_target(

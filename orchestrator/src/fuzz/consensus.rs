@@ -13,10 +13,11 @@
 use std::fmt;
 
 use rand::Rng as _;
+use swarmrt_agent::consensus::Item;
 use swarmrt_agent::consensus::raft::Raft;
 use swarmrt_agent::consensus::stream;
-use swarmrt_protocol::config::{Config, LossModel};
-use swarmrt_protocol::consensus::{ConsensusConfig, Item, Proposal};
+use swarmrt_scenario::consensus::{ConsensusConfig, Proposal};
+use swarmrt_scenario::{Config, LossModel};
 
 use super::{Sim, base_config, grid};
 
@@ -154,13 +155,15 @@ pub fn draw(seed: u64) -> Case {
         propose,
         ..ConsensusConfig::default()
     });
-    #[allow(irrefutable_let_patterns)] // other behaviours join the enum
-    if let swarmrt_protocol::config::BehaviourConfig::Goto(g) = &mut cfg.behaviour {
-        g.beacon_period = if rng.random_bool(0.5) {
+    if cfg.behaviour.kind == "goto" {
+        let period: i64 = if rng.random_bool(0.5) {
             0
         } else {
             rng.random_range(2..=10)
         };
+        cfg.behaviour
+            .params
+            .insert("beacon_period".into(), toml::Value::Integer(period));
     }
     let mut faults = Vec::new();
     for _ in 0..rng.random_range(0..=6) {

@@ -8,7 +8,7 @@
 //! leader of that moment crashes, and the re-election time runs from the crash to the next
 //! leader's note (the checker's `reelection_ticks`).
 
-use swarmrt_protocol::config::LossModel;
+use swarmrt_scenario::LossModel;
 
 use super::{Sim, base_config, grid};
 

@@ -15,10 +15,11 @@ pub mod election;
 pub mod quadrant;
 
 use swarmrt_agent::Agent;
+use swarmrt_agent::Note;
+use swarmrt_agent::consensus::Role;
 use swarmrt_agent::consensus::raft::Persistent;
-use swarmrt_protocol::config::Config;
-use swarmrt_protocol::consensus::Role;
-use swarmrt_protocol::{Frame, Neighbour, Note, Observation, RobotState};
+use swarmrt_protocol::{Frame, Neighbour, NoteJson, Observation, RobotState};
+use swarmrt_scenario::Config;
 use swarmrt_world::Event;
 use swarmrt_world::radio::RadioMedium;
 
@@ -214,12 +215,12 @@ impl Sim {
             obs.inbox_len = inbox.len().min(obs.inbox.len()) as u16;
             let cmd = agent.step(&obs);
             *outbox = cmd.outbox().to_vec();
-            for note in cmd.notes().unwrap_or_default() {
+            for note in cmd.notes::<Note>().unwrap_or_default() {
                 if let Some(rec) = &mut self.record {
                     rec.push(event_line(&Event::Note {
                         tick,
                         robot: i as u32,
-                        note: note.clone(),
+                        note: NoteJson::new(note.to_json()).expect("a note is one JSON value"),
                     }));
                 }
                 if let Note::Consensus(c) = note {

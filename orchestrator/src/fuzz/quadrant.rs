@@ -12,9 +12,9 @@
 use rand::Rng as _;
 use std::f64::consts::PI;
 use swarmrt_agent::consensus::stream;
-use swarmrt_protocol::config::LossModel;
-use swarmrt_protocol::consensus::{Algorithm, ConsensusConfig, QuadrantConfig};
 use swarmrt_protocol::{MAX_NEIGHBOURS, Neighbour};
+use swarmrt_scenario::LossModel;
+use swarmrt_scenario::consensus::{Algorithm, ConsensusConfig, QuadrantConfig};
 
 use super::{Sim, base_config};
 

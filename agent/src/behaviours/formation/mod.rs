@@ -13,19 +13,25 @@
 //! delay the inputs differ, and the heading averaging pulls robots that disagreed back together.
 
 pub mod direction;
+pub mod messages;
+pub mod metrics;
 pub mod observers;
+mod params;
 
 use std::collections::BTreeMap;
-use std::f64::consts::PI;
 
-use swarmrt_protocol::config::{Config, FormationConfig, LidarConfig};
-use swarmrt_protocol::rng::{self, Rng};
-use swarmrt_protocol::{BROADCAST, Command, Note, Observation, RadioMsg};
+use serde_json::Value;
+use swarmrt_protocol::records::Records;
+use swarmrt_protocol::{BROADCAST, Observation};
+use swarmrt_scenario::rng::{self, Rng};
+use swarmrt_scenario::{Config, LidarConfig, wrap_angle};
 
 use self::direction::{Dir, Seen};
-use self::observers::{Placed, Role};
-use super::Behaviour;
-use crate::agent::Decoded;
+use self::observers::{ObserverRole, Placed};
+use crate::behaviour::{Act, Behaviour};
+use crate::inbox::Heard;
+pub use messages::{FormationMsg, FormationNote};
+pub use params::FormationParams;
 
 /// The desired formation: each robot's offset from the virtual leader, i.e. its start position
 /// relative to the centre of the start layout (section 5.1: the virtual leader starts at the
@@ -42,21 +48,21 @@ pub fn offsets(cfg: &Config) -> Vec<(f64, f64)> {
 
 /// What a robot last heard from a neighbour.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Heard {
+struct LastHeard {
     sent_tick: u64,
     x: f64,
     y: f64,
     theta: f64,
     v: f64,
     psi: f64,
-    role: Role,
+    role: ObserverRole,
     obstacle: bool,
 }
 
 /// One robot's formation state.
 pub struct Formation {
     id: u32,
-    p: FormationConfig,
+    p: FormationParams,
     offsets: Vec<(f64, f64)>,
     goal: (f64, f64),
     /// Distance from the goal at which the virtual leader stops.
@@ -69,19 +75,19 @@ pub struct Formation {
     /// The swarm heading this robot holds.
     psi: f64,
     previous: Dir,
-    heard: BTreeMap<u32, Heard>,
+    heard: BTreeMap<u32, LastHeard>,
     /// This robot's own message of last tick, used like a received one so that every robot
     /// decides from verdicts of the same age.
-    own: Option<Heard>,
+    own: Option<LastHeard>,
     /// The role this robot's lidar is on for (decided last tick).
-    role: Role,
+    role: ObserverRole,
     stopped: bool,
     epsilon: Rng,
 }
 
 impl Formation {
     /// Robot `id`'s formation behaviour.
-    pub fn new(cfg: &Config, p: &FormationConfig, id: u32) -> Formation {
+    pub fn new(cfg: &Config, p: &FormationParams, id: u32) -> Formation {
         let offsets = offsets(cfg);
         let spread = offsets.iter().map(|o| o.0.hypot(o.1)).fold(0.0, f64::max);
         let g = cfg.map.goal;
@@ -100,7 +106,7 @@ impl Formation {
             previous: Dir::Straight,
             heard: BTreeMap::new(),
             own: None,
-            role: Role::None,
+            role: ObserverRole::None,
             stopped: false,
             epsilon: rng::stream(cfg.scenario.seed, "formation-epsilon", id as u64),
         }
@@ -112,7 +118,7 @@ impl Formation {
     }
 
     /// The role its lidar is on for.
-    pub fn role(&self) -> Role {
+    pub fn role(&self) -> ObserverRole {
         self.role
     }
 
@@ -121,7 +127,7 @@ impl Formation {
     }
 
     /// Neighbours heard recently enough to count, with poses extrapolated to `tick`.
-    fn alive(&self, tick: u64) -> Vec<(u32, f64, f64, Heard)> {
+    fn alive(&self, tick: u64) -> Vec<(u32, f64, f64, LastHeard)> {
         self.heard
             .iter()
             .filter(|(_, h)| tick.saturating_sub(h.sent_tick) <= self.p.stale_ticks as u64)
@@ -137,8 +143,8 @@ impl Formation {
     /// several robots claiming one role at the same age are or-ed.
     fn verdicts(&self, tick: u64) -> Seen {
         let mut best: [(u64, bool); 4] = [(0, false); 4];
-        let recent = |h: &Heard| {
-            h.role != Role::None
+        let recent = |h: &LastHeard| {
+            h.role != ObserverRole::None
                 && h.sent_tick < tick
                 && tick - h.sent_tick <= self.p.verdict_ticks as u64
         };
@@ -154,25 +160,31 @@ impl Formation {
             }
         }
         Seen {
-            middle: best[Role::Middle as usize].1,
-            left: best[Role::Left as usize].1,
-            right: best[Role::Right as usize].1,
+            middle: best[ObserverRole::Middle as usize].1,
+            left: best[ObserverRole::Left as usize].1,
+            right: best[ObserverRole::Right as usize].1,
         }
     }
 
     /// Whether this robot's lidar sees an obstacle (not a known teammate) in `role`'s cone.
-    fn lidar_verdict(&self, obs: &Observation, role: Role, psi: f64, mates: &[(f64, f64)]) -> bool {
+    fn lidar_verdict(
+        &self,
+        obs: &Observation,
+        role: ObserverRole,
+        psi: f64,
+        mates: &[(f64, f64)],
+    ) -> bool {
         let side = self.p.side_offset_deg.to_radians();
         let centre = psi
             + match role {
-                Role::Left => side,
-                Role::Right => -side,
+                ObserverRole::Left => side,
+                ObserverRole::Right => -side,
                 _ => 0.0,
             };
         let cone = self.p.cone_deg.to_radians();
         obs.lidar().iter().enumerate().any(|(k, &range)| {
             let angle = obs.theta + self.lidar.ray_angle(k);
-            if wrap(angle - centre).abs() > cone || range >= self.p.detect_range {
+            if wrap_angle(angle - centre).abs() > cone || range >= self.p.detect_range {
                 return false;
             }
             let hit = (obs.x + range * angle.cos(), obs.y + range * angle.sin());
@@ -185,19 +197,42 @@ impl Formation {
 }
 
 impl Behaviour for Formation {
-    fn step(&mut self, obs: &Observation, inbox: &[Decoded]) -> Command {
+    const KIND: &'static str = "formation";
+    type Params = FormationParams;
+    type Msg = FormationMsg;
+    type Note = FormationNote;
+    const METRICS: &'static [&'static str] = &metrics::NAMES;
+
+    fn new(cfg: &Config, params: &FormationParams, id: u32) -> Formation {
+        Formation::new(cfg, params, id)
+    }
+
+    fn metrics(
+        cfg: &Config,
+        _params: &FormationParams,
+        run: &Records,
+    ) -> Vec<(&'static str, Value)> {
+        metrics::metrics(cfg, run)
+    }
+
+    fn step(
+        &mut self,
+        obs: &Observation,
+        inbox: &[Heard<FormationMsg>],
+        act: &mut Act<FormationMsg, FormationNote>,
+    ) {
         let tick = obs.tick;
         for m in inbox {
-            if let RadioMsg::Formation {
-                x,
-                y,
-                theta,
-                v,
-                psi,
-                role,
-                obstacle,
-            } = m.msg
             {
+                let FormationMsg {
+                    x,
+                    y,
+                    theta,
+                    v,
+                    psi,
+                    role,
+                    obstacle,
+                } = m.msg;
                 let newer = self
                     .heard
                     .get(&m.src)
@@ -206,21 +241,20 @@ impl Behaviour for Formation {
                 if newer && sane && m.src != self.id {
                     self.heard.insert(
                         m.src,
-                        Heard {
+                        LastHeard {
                             sent_tick: m.sent_tick,
                             x,
                             y,
                             theta,
                             v,
                             psi,
-                            role: Role::from_u8(role),
+                            role: ObserverRole::from_u8(role),
                             obstacle: obstacle != 0,
                         },
                     );
                 }
             }
         }
-        let mut notes = Vec::new();
         let alive = self.alive(tick);
 
         // 1. Virtual leader (eq. 2-3) over this robot and the neighbours it hears; swarm
@@ -243,7 +277,7 @@ impl Behaviour for Formation {
         // 2. The turn from last tick's verdicts, then epsilon-greedy.
         let seen = self.verdicts(tick);
         let to_goal = (self.goal.1 - leader.1).atan2(self.goal.0 - leader.0);
-        let target_error = wrap(to_goal - self.psi);
+        let target_error = wrap_angle(to_goal - self.psi);
         let (seed, half) = (self.seed, self.turn / 2.0);
         let dir = direction::decide(seen, self.previous, target_error, half, || {
             // Every robot draws the same coin for the same tick: the side is common knowledge.
@@ -258,20 +292,20 @@ impl Behaviour for Formation {
             &mut self.epsilon,
         );
         if flipped {
-            notes.push(Note::EpsilonFlip);
+            act.note(FormationNote::EpsilonFlip);
         }
         if dir != self.previous {
-            notes.push(Note::Turn { dir: dir as i8 });
+            act.note(FormationNote::Turn { dir: dir as i8 });
         }
         self.previous = dir;
         let psi_before = self.psi;
-        self.psi = wrap(self.psi + dir.sign() * self.turn);
+        self.psi = wrap_angle(self.psi + dir.sign() * self.turn);
 
         // 3. This tick's lidar verdict (for the role the lidar was on for), then next tick's
         //    observers in the leader frame (eq. 4-5).
         let mates: Vec<(f64, f64)> = alive.iter().map(|a| (a.1, a.2)).collect();
-        let obstacle =
-            self.role != Role::None && self.lidar_verdict(obs, self.role, psi_before, &mates);
+        let obstacle = self.role != ObserverRole::None
+            && self.lidar_verdict(obs, self.role, psi_before, &mates);
         let verdict_role = self.role;
         let arrived = (leader.0 - self.goal.0).hypot(leader.1 - self.goal.1) <= self.arrive;
         self.stopped |= arrived;
@@ -283,17 +317,16 @@ impl Behaviour for Formation {
             })
             .collect();
         let role = if self.stopped {
-            Role::None
+            ObserverRole::None
         } else {
             observers::select(&placed, self.radius).role_of(self.id)
         };
         if role != self.role {
-            notes.push(Note::Role { role: role as u8 });
+            act.note(FormationNote::Role { role: role as u8 });
         }
         self.role = role;
 
         // 4. Steer at constant speed toward the slot, at most the turn angle per step.
-        let mut cmd = Command::act(self.id, tick);
         let v = if self.stopped { 0.0 } else { self.p.speed };
         if !self.stopped {
             let (s, c) = self.psi.sin_cos();
@@ -302,12 +335,12 @@ impl Behaviour for Formation {
                 leader.1 + own_offset.1 + self.p.lookahead * s,
             );
             let want = (slot.1 - me.1).atan2(slot.0 - me.0);
-            let err = wrap(want - obs.theta).clamp(-self.turn, self.turn);
-            cmd.v = v;
-            cmd.omega = err / self.dt;
+            let err = wrap_angle(want - obs.theta).clamp(-self.turn, self.turn);
+            act.v = v;
+            act.omega = err / self.dt;
         }
-        cmd.lidar_on = (role != Role::None) as u8;
-        let msg = Heard {
+        act.lidar_on = role != ObserverRole::None;
+        let msg = LastHeard {
             sent_tick: tick,
             x: me.0,
             y: me.1,
@@ -318,10 +351,9 @@ impl Behaviour for Formation {
             obstacle,
         };
         self.own = Some(msg);
-        // Both fit by construction: one small frame, a few notes.
-        let _ = cmd.push_frame(
+        act.send(
             BROADCAST,
-            &RadioMsg::Formation {
+            FormationMsg {
                 x: msg.x,
                 y: msg.y,
                 theta: msg.theta,
@@ -331,17 +363,5 @@ impl Behaviour for Formation {
                 obstacle: msg.obstacle as u8,
             },
         );
-        let _ = cmd.set_notes(&notes);
-        cmd
     }
-}
-
-fn wrap(a: f64) -> f64 {
-    let mut a = a % (2.0 * PI);
-    if a <= -PI {
-        a += 2.0 * PI;
-    } else if a > PI {
-        a -= 2.0 * PI;
-    }
-    a
 }

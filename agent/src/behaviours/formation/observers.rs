@@ -3,7 +3,7 @@
 
 /// A robot's observer role. Only observers turn their lidar on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Role {
+pub enum ObserverRole {
     /// Lidar off: follows its neighbours.
     None = 0,
     /// The leading robot; its lidar looks straight ahead.
@@ -14,14 +14,14 @@ pub enum Role {
     Right = 3,
 }
 
-impl Role {
+impl ObserverRole {
     /// Decodes the wire value; anything unknown is `None`.
-    pub fn from_u8(v: u8) -> Role {
+    pub fn from_u8(v: u8) -> ObserverRole {
         match v {
-            1 => Role::Middle,
-            2 => Role::Left,
-            3 => Role::Right,
-            _ => Role::None,
+            1 => ObserverRole::Middle,
+            2 => ObserverRole::Left,
+            3 => ObserverRole::Right,
+            _ => ObserverRole::None,
         }
     }
 }
@@ -50,15 +50,15 @@ pub struct Observers {
 
 impl Observers {
     /// The role of robot `id`.
-    pub fn role_of(&self, id: u32) -> Role {
+    pub fn role_of(&self, id: u32) -> ObserverRole {
         if self.middle == Some(id) {
-            Role::Middle
+            ObserverRole::Middle
         } else if self.left == Some(id) {
-            Role::Left
+            ObserverRole::Left
         } else if self.right == Some(id) {
-            Role::Right
+            ObserverRole::Right
         } else {
-            Role::None
+            ObserverRole::None
         }
     }
 }

@@ -1,8 +1,10 @@
 //! Strategies for config fuzzing: the real configs in `configs/`, random mutations of their
 //! text, random `--set key=value` overrides and random TOML-ish text.
 //!
-//! Shared by `protocol/tests/config_fuzz.rs` (in-process, many cases) and
+//! Shared by `agent/tests/config_fuzz.rs` (in-process, many cases) and
 //! `tests/tests/config_fuzz.rs` (through the `swarm` binary), which includes it with `#[path]`.
+//! The `[behaviour]` keys and kinds come from the behaviour registry, so a new behaviour is
+//! fuzzed without editing this file.
 //! Every draw comes from proptest's runner, which the tests seed with a fixed seed.
 
 #![allow(dead_code)]
@@ -47,8 +49,8 @@ pub fn real_configs() -> Vec<(String, String)> {
     out
 }
 
-/// Every key path a config has (the leaves and the tables).
-pub const KEYS: &[&str] = &[
+/// Every key path a config has outside `[behaviour]` (the leaves and the tables).
+const SCENARIO_KEYS: &[&str] = &[
     "scenario",
     "scenario.name",
     "scenario.seed",
@@ -99,19 +101,6 @@ pub const KEYS: &[&str] = &[
     "radio.line_of_sight",
     "behaviour",
     "behaviour.kind",
-    "behaviour.speed",
-    "behaviour.avoid_distance",
-    "behaviour.beacon_period",
-    "behaviour.slot_spacing",
-    "behaviour.turn_deg",
-    "behaviour.detect_range",
-    "behaviour.cone_deg",
-    "behaviour.side_offset_deg",
-    "behaviour.epsilon_obstacle",
-    "behaviour.epsilon_clear",
-    "behaviour.lookahead",
-    "behaviour.stale_ticks",
-    "behaviour.verdict_ticks",
     "faults",
     "faults.kill",
     "faults.freeze",
@@ -185,8 +174,6 @@ const EDGE_VALUES: &[&str] = &[
     "'lit'",
     "\"\"",
     "\"leader\"",
-    "\"formation\"",
-    "\"goto\"",
     "\"raft\"",
     "\"quadrant\"",
     "\"gilbert-elliott\"",
@@ -225,9 +212,20 @@ fn toml_float(v: f64) -> String {
 }
 
 /// A random TOML value: edge cases, integers, floats, strings, arrays and tables.
+/// [`EDGE_VALUES`] and every behaviour's name, quoted.
+fn edge_values() -> Vec<String> {
+    let mut values: Vec<String> = EDGE_VALUES.iter().map(|v| v.to_string()).collect();
+    values.extend(
+        swarmrt_agent::registry::kinds()
+            .iter()
+            .map(|k| format!("\"{k}\"")),
+    );
+    values
+}
+
 pub fn value() -> BoxedStrategy<String> {
     prop_oneof![
-        4 => prop::sample::select(EDGE_VALUES).prop_map(String::from),
+        4 => prop::sample::select(edge_values()),
         2 => (-5i64..50).prop_map(|v| v.to_string()),
         1 => any::<i64>().prop_map(|v| v.to_string()),
         2 => (-20.0f64..50.0).prop_map(toml_float),
@@ -259,7 +257,7 @@ pub fn some_value() -> BoxedStrategy<String> {
 /// A key: a real key path most of the time, otherwise made up or malformed.
 pub fn key() -> BoxedStrategy<String> {
     prop_oneof![
-        6 => prop::sample::select(KEYS).prop_map(String::from),
+        6 => prop::sample::select(keys()),
         1 => "[a-z_]{1,8}(\\.[a-z_]{1,8}){0,2}",
         1 => prop::sample::select(&[
             "", ".", "..", "radio..loss", ".radio", "radio.", "radio.loss.x",
@@ -270,6 +268,13 @@ pub fn key() -> BoxedStrategy<String> {
         .prop_map(String::from),
     ]
     .boxed()
+}
+
+/// Every key path a config has: the scenario's and every behaviour's parameters.
+pub fn keys() -> Vec<String> {
+    let mut keys: Vec<String> = SCENARIO_KEYS.iter().map(|k| k.to_string()).collect();
+    keys.extend(swarmrt_agent::registry::param_keys());
+    keys
 }
 
 /// A number for geometry: huge, tiny, non-finite, or ordinary.

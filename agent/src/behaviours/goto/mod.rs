@@ -4,18 +4,35 @@
 //! fight for one point), steers proportionally toward it, and when the lidar sees something
 //! closer than `avoid_distance` ahead, turns toward the more open side and slows down.
 
-use std::f64::consts::PI;
-use swarmrt_protocol::config::{Config, GotoConfig, LidarConfig, nearest_grid_points};
-use swarmrt_protocol::consensus::Decision;
-use swarmrt_protocol::{BROADCAST, Command, Observation, RadioMsg};
+mod params;
 
-use super::Behaviour;
-use crate::agent::Decoded;
+use std::f64::consts::PI;
+
+use serde::{Deserialize, Serialize};
+use swarmrt_protocol::{BROADCAST, Observation};
+use swarmrt_scenario::layout::nearest_grid_points;
+use swarmrt_scenario::{Config, LidarConfig, wrap_angle};
+
+use crate::behaviour::{Act, Behaviour, NoNote};
+use crate::consensus::Decision;
+use crate::inbox::Heard;
+pub use params::GotoParams;
+
+/// Periodic pose beacon: a robot's pose as it estimates it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Beacon {
+    /// Sender's estimated x in metres.
+    pub x: f64,
+    /// Sender's estimated y in metres.
+    pub y: f64,
+    /// Sender's estimated heading in radians.
+    pub theta: f64,
+}
 
 /// Go-to-goal state for one robot.
 pub struct Goto {
     id: u32,
-    params: GotoConfig,
+    params: GotoParams,
     lidar: LidarConfig,
     radius: f64,
     dt: f64,
@@ -37,7 +54,7 @@ const AHEAD: f64 = 70.0 * PI / 180.0;
 
 impl Goto {
     /// Robot `id`'s behaviour for this scenario.
-    pub fn new(cfg: &Config, params: &GotoConfig, id: u32) -> Goto {
+    pub fn new(cfg: &Config, params: &GotoParams, id: u32) -> Goto {
         let g = cfg.map.goal;
         let mut goto = Goto {
             id,
@@ -80,17 +97,16 @@ impl Goto {
     }
 }
 
-fn wrap(a: f64) -> f64 {
-    let mut a = a % (2.0 * PI);
-    if a <= -PI {
-        a += 2.0 * PI;
-    } else if a > PI {
-        a -= 2.0 * PI;
-    }
-    a
-}
-
 impl Behaviour for Goto {
+    const KIND: &'static str = "goto";
+    type Params = GotoParams;
+    type Msg = Beacon;
+    type Note = NoNote;
+
+    fn new(cfg: &Config, params: &GotoParams, id: u32) -> Goto {
+        Goto::new(cfg, params, id)
+    }
+
     /// `SetGoal`: head for this robot's slot around the new goal (same radius);
     /// `SetSpeed`: cruise at the new speed.
     fn apply(&mut self, decision: &Decision) {
@@ -104,27 +120,27 @@ impl Behaviour for Goto {
         }
     }
 
-    fn step(&mut self, obs: &Observation, _inbox: &[Decoded]) -> Command {
-        let mut cmd = Command::act(self.id, obs.tick);
-        cmd.lidar_on = 1;
+    fn step(&mut self, obs: &Observation, _inbox: &[Heard<Beacon>], act: &mut Act<Beacon, NoNote>) {
+        act.lidar_on = true;
         let p = self.params;
         if p.beacon_period > 0 && (obs.tick + self.id as u64).is_multiple_of(p.beacon_period as u64)
         {
-            let beacon = RadioMsg::Beacon {
-                x: obs.x,
-                y: obs.y,
-                theta: obs.theta,
-            };
-            // A beacon always fits an empty outbox.
-            let _ = cmd.push_frame(BROADCAST, &beacon);
+            act.send(
+                BROADCAST,
+                Beacon {
+                    x: obs.x,
+                    y: obs.y,
+                    theta: obs.theta,
+                },
+            );
         }
 
         let (dx, dy) = (self.slot.0 - obs.x, self.slot.1 - obs.y);
         let dist = (dx * dx + dy * dy).sqrt();
         if dist < ARRIVE {
-            return cmd;
+            return;
         }
-        let err = wrap(dy.atan2(dx) - obs.theta);
+        let err = wrap_angle(dy.atan2(dx) - obs.theta);
         let mut omega = 2.0 * err;
         // Slow down when facing away and when close, so the robot does not orbit its slot.
         let mut v = p.speed * err.cos().max(0.0) * (dist / (4.0 * self.radius)).min(1.0);
@@ -156,7 +172,7 @@ impl Behaviour for Goto {
             if in_goal_area {
                 // Inside the goal area but blocked, most likely by a robot parked at its
                 // slot: park here instead of circling.
-                return cmd;
+                return;
             }
             // Commit to one side until the way to the slot is open: choosing afresh each
             // tick dithers left-right in front of an obstacle (a local minimum).
@@ -184,8 +200,7 @@ impl Behaviour for Goto {
         }
 
         // Never overshoot the slot within one tick.
-        cmd.v = v.min(dist / self.dt).clamp(0.0, self.max_speed);
-        cmd.omega = omega.clamp(-self.max_turn, self.max_turn);
-        cmd
+        act.v = v.min(dist / self.dt).clamp(0.0, self.max_speed);
+        act.omega = omega.clamp(-self.max_turn, self.max_turn);
     }
 }

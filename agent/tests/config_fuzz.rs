@@ -4,25 +4,27 @@
 //! valid and its resolved TOML loads back to the same config.
 //!
 //! The seed is fixed (see `common::mutate::runner`); explore further with e.g.
-//! `PROPTEST_CASES=100000 PROPTEST_RNG_SEED=7 cargo test -p swarmrt-protocol --test config_fuzz`.
+//! `PROPTEST_CASES=100000 PROPTEST_RNG_SEED=7 cargo test -p swarmrt-agent --test config_fuzz`.
 
 #[path = "common/mutate.rs"]
 mod mutate;
 
 use mutate::{mutated_config, override_arg, random_text, runner};
 use proptest::prelude::*;
-use swarmrt_protocol::config::{Config, ConfigError, escape_controls};
+use swarmrt_agent::registry;
+use swarmrt_scenario::ConfigError;
+use swarmrt_scenario::error::escape_controls;
 
 const FILE: &str = "fuzz.toml";
 
 /// Loads `text` with `overrides` and checks everything the loader promises about the result.
 fn check_load(text: &str, overrides: &[String]) -> Result<(), TestCaseError> {
-    match Config::from_toml_str(FILE, text, overrides) {
+    match registry::from_toml_str(FILE, text, overrides) {
         Err(e) => check_error(&e),
         Ok(cfg) => {
             prop_assert_eq!(cfg.validate(), Ok(()));
             let resolved = cfg.to_toml();
-            match Config::from_toml_str(FILE, &resolved, &[]) {
+            match registry::from_toml_str(FILE, &resolved, &[]) {
                 Ok(again) => prop_assert_eq!(again, cfg, "round trip through:\n{}", resolved),
                 Err(e) => prop_assert!(false, "resolved config refused: {e}\n{resolved}"),
             }
@@ -91,7 +93,7 @@ proptest! {
 #[test]
 fn every_real_config_loads_and_round_trips() {
     for (name, text) in mutate::real_configs() {
-        let cfg = Config::from_toml_str(&name, &text, &[]).unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!(Config::from_toml_str(&name, &cfg.to_toml(), &[]), Ok(cfg));
+        let cfg = registry::from_toml_str(&name, &text, &[]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(registry::from_toml_str(&name, &cfg.to_toml(), &[]), Ok(cfg));
     }
 }

@@ -5,33 +5,32 @@ use serde::{Deserialize, Serialize};
 
 /// The fault schedule.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct FaultsConfig {
     /// SIGKILL a robot's process; it counts as dead from exactly that tick.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub kill: Vec<KillFault>,
     /// SIGSTOP a robot's process from `from` to `to` (SIGCONT): it stands still, silent, and
     /// answers again from `to` on.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub freeze: Vec<FreezeFault>,
     /// SIGKILL a robot's process and start a fresh one with the same id: it is offline for
     /// `down_ticks`, then rejoins with no memory.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub restart: Vec<RestartFault>,
     /// Probability per running robot per tick that its process is killed (drawn from the seed).
-    #[serde(default, skip_serializing_if = "is_zero")]
+    #[serde(skip_serializing_if = "is_zero")]
     pub kill_rate: f64,
     /// Probability per running robot per tick that its process is frozen for `freeze_ticks`.
-    #[serde(default, skip_serializing_if = "is_zero")]
+    #[serde(skip_serializing_if = "is_zero")]
     pub freeze_rate: f64,
     /// Length of a random freeze, ticks.
-    #[serde(default = "default_freeze_ticks")]
     pub freeze_ticks: u64,
     /// Split the radio: robots in different groups cannot hear each other from `from` to `to`.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub partition: Vec<PartitionFault>,
     /// All radio off from `from` to `to`.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub blackout: Vec<Window>,
 }
 
@@ -87,10 +86,6 @@ fn default_down_ticks() -> u64 {
     10
 }
 
-fn default_freeze_ticks() -> u64 {
-    20
-}
-
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
@@ -129,7 +124,7 @@ impl Default for FaultsConfig {
             restart: Vec::new(),
             kill_rate: 0.0,
             freeze_rate: 0.0,
-            freeze_ticks: default_freeze_ticks(),
+            freeze_ticks: 20,
             partition: Vec::new(),
             blackout: Vec::new(),
         }

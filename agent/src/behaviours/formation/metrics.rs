@@ -1,10 +1,10 @@
 //! Formation metrics (seed 000): how well the formation held, loops, epsilon flips.
 
 use serde_json::{Value, json};
-use swarmrt_agent::behaviours::formation::offsets;
-use swarmrt_protocol::config::Config;
+use swarmrt_protocol::records::Records;
+use swarmrt_scenario::Config;
 
-use super::records::Records;
+use super::offsets;
 
 /// A loop: the virtual leader comes back within this distance of where it was (metres) ...
 const LOOP_RADIUS: f64 = 1.0;
@@ -20,7 +20,7 @@ pub const NAMES: [&str; 4] = [
 ];
 
 /// `formation_error_rms`, `loops_detected`, `loop_ticks`, `epsilon_flips`.
-pub fn metrics(cfg: &Config, rec: &Records) -> Value {
+pub fn metrics(cfg: &Config, rec: &Records) -> Vec<(&'static str, Value)> {
     let offsets = offsets(cfg);
     let mut sq = 0.0;
     let mut samples = 0u64;
@@ -44,12 +44,20 @@ pub fn metrics(cfg: &Config, rec: &Records) -> Value {
         leader_path.push((lx, ly));
     }
     let (loops, loop_ticks) = loops(&leader_path);
-    json!({
-        "formation_error_rms": if samples > 0 { (sq / samples as f64).sqrt() } else { 0.0 },
-        "loops_detected": loops,
-        "loop_ticks": loop_ticks,
-        "epsilon_flips": rec.events_of("note").filter(|e| e["note"] == "epsilon_flip").count(),
-    })
+    let rms = if samples > 0 {
+        (sq / samples as f64).sqrt()
+    } else {
+        0.0
+    };
+    vec![
+        ("formation_error_rms", json!(rms)),
+        ("loops_detected", json!(loops)),
+        ("loop_ticks", json!(loop_ticks)),
+        (
+            "epsilon_flips",
+            json!(rec.notes().filter(|n| *n == "epsilon_flip").count()),
+        ),
+    ]
 }
 
 /// Loops in a path, detected as revisited states (seed 000, section 5.3: a trajectory that

@@ -1,0 +1,123 @@
+//! What a behaviour is: a deterministic state machine fed the tick's observation and the
+//! messages of its own kind, answering with wheel speeds, the lidar switch, radio messages and
+//! notes. No I/O, no clock; randomness only from streams seeded by the run seed.
+//!
+//! A behaviour owns everything about itself in its folder under `behaviours/`: its parameters
+//! (the `[behaviour]` keys, with their defaults and bounds), its radio message, its notes, its
+//! core and the metrics computed from its records. `registry.rs` lists it once.
+
+use std::fmt::Debug;
+
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use serde_json::Value;
+use swarmrt_protocol::Observation;
+use swarmrt_protocol::records::Records;
+use swarmrt_scenario::{Config, KeyError};
+
+use crate::consensus::Decision;
+use crate::inbox::Heard;
+
+/// A behaviour's `[behaviour]` parameters: a serde struct with `#[serde(default,
+/// deny_unknown_fields)]` and one `impl Default`, checked against the whole config.
+pub trait Params:
+    Serialize + DeserializeOwned + Default + Debug + Clone + PartialEq + Send + Sync + 'static
+{
+    /// Checks every value against its bounds; the key is `behaviour.<field>`.
+    fn validate(&self, cfg: &Config) -> Result<(), KeyError>;
+}
+
+/// What a behaviour decided this tick. Starts stopped, silent, lidar off.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Act<M, N> {
+    /// Forward speed in m/s.
+    pub v: f64,
+    /// Turn rate in rad/s.
+    pub omega: f64,
+    /// Lidar on for the next observation.
+    pub lidar_on: bool,
+    frames: Vec<(u32, M)>,
+    notes: Vec<N>,
+}
+
+impl<M, N> Default for Act<M, N> {
+    fn default() -> Self {
+        Act {
+            v: 0.0,
+            omega: 0.0,
+            lidar_on: false,
+            frames: Vec::new(),
+            notes: Vec::new(),
+        }
+    }
+}
+
+impl<M, N> Act<M, N> {
+    /// Sends `msg` to robot `dst` (or [`swarmrt_protocol::BROADCAST`]). Frames beyond the
+    /// outbox are dropped, as the radio would.
+    pub fn send(&mut self, dst: u32, msg: M) {
+        self.frames.push((dst, msg));
+    }
+
+    /// Reports `note` in the run record (`events.jsonl`).
+    pub fn note(&mut self, note: N) {
+        self.notes.push(note);
+    }
+
+    /// Clears it for the next tick, keeping the buffers.
+    pub fn reset(&mut self) {
+        self.v = 0.0;
+        self.omega = 0.0;
+        self.lidar_on = false;
+        self.frames.clear();
+        self.notes.clear();
+    }
+
+    /// The messages to send, in order, and the notes.
+    pub fn drain(&mut self) -> (std::vec::Drain<'_, (u32, M)>, std::vec::Drain<'_, N>) {
+        (self.frames.drain(..), self.notes.drain(..))
+    }
+}
+
+/// A robot behaviour.
+pub trait Behaviour: Send + Sized + 'static {
+    /// The name in `behaviour.kind`.
+    const KIND: &'static str;
+    /// Its `[behaviour]` parameters.
+    type Params: Params;
+    /// What it says over the radio (postcard-encoded into frames).
+    type Msg: Serialize + DeserializeOwned + Debug + Clone + PartialEq + Send + Sync + 'static;
+    /// What it reports about itself (rendered as JSON in `events.jsonl`).
+    type Note: Serialize + DeserializeOwned + Debug + Clone + PartialEq + Send + Sync + 'static;
+    /// Names of the metrics [`Behaviour::metrics`] computes.
+    const METRICS: &'static [&'static str] = &[];
+
+    /// Robot `id`'s behaviour for this scenario.
+    fn new(cfg: &Config, params: &Self::Params, id: u32) -> Self;
+
+    /// This tick's decision. `inbox` holds this tick's messages of this behaviour's kind.
+    fn step(
+        &mut self,
+        obs: &Observation,
+        inbox: &[Heard<Self::Msg>],
+        act: &mut Act<Self::Msg, Self::Note>,
+    );
+
+    /// Acts on a swarm decision the consensus layer committed and applied. Called before
+    /// `step` in the tick it was applied; behaviours that have no use for it ignore it.
+    fn apply(&mut self, _decision: &Decision) {}
+
+    /// Its own metrics, computed after the run from the records alone (so both modes give
+    /// the same numbers): `(name, value)` for each name in [`Behaviour::METRICS`].
+    fn metrics(
+        _cfg: &Config,
+        _params: &Self::Params,
+        _run: &Records,
+    ) -> Vec<(&'static str, Value)> {
+        Vec::new()
+    }
+}
+
+/// The empty note type, for behaviours that report nothing.
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+pub enum NoNote {}

@@ -1,0 +1,335 @@
+//! Every behaviour a robot can run, listed once. Adding a behaviour is a new folder under
+//! `behaviours/` and one line in the `registry!` call at the bottom of this file: the line
+//! gives the behaviour its slot in the radio and note envelopes ([`RadioMsg`], [`Note`]),
+//! makes its `kind` loadable from a config, and its metrics computable from the records.
+//!
+//! The envelopes are postcard-encoded enums, one variant per behaviour (the variant order is
+//! the line order), then the consensus layer's: the world checks that a frame decodes as a
+//! [`RadioMsg`] and records each [`Note`] as JSON, through [`VOCABULARY`].
+
+use std::marker::PhantomData;
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use swarmrt_protocol::records::Records;
+use swarmrt_protocol::{Command, NoteJson, Observation, RecordedNote, Vocabulary};
+use swarmrt_scenario::{BehaviourSection, Config, ConfigError, KeyError};
+
+use crate::behaviour::{Act, Behaviour, Params};
+use crate::behaviours::{formation, goto};
+use crate::consensus::{ConsensusMsg, ConsensusNote, Decision};
+use crate::inbox::Heard;
+
+/// Connects a behaviour to its variants of the envelopes (written by `registry!`).
+pub trait Enveloped: Behaviour {
+    /// `msg` inside the radio envelope.
+    fn wrap_msg(msg: Self::Msg) -> RadioMsg;
+    /// The behaviour's own message, if `msg` is one.
+    fn unwrap_msg(msg: RadioMsg) -> Option<Self::Msg>;
+    /// `note` inside the note envelope.
+    fn wrap_note(note: Self::Note) -> Note;
+}
+
+/// One behaviour of the registry with its types erased.
+pub trait Plugin: Sync {
+    /// `behaviour.kind`.
+    fn kind(&self) -> &'static str;
+    /// Parses, defaults and validates the `[behaviour]` parameters; returns them resolved
+    /// (every key present, in declaration order).
+    fn resolve(&self, params: &toml::Table, cfg: &Config) -> Result<toml::Table, KeyError>;
+    /// Robot `id`'s brain.
+    fn brain(&self, cfg: &Config, id: u32) -> Result<Box<dyn Brain>, KeyError>;
+    /// Every `[behaviour]` key with its default, as `behaviour.<key>`.
+    fn keys(&self) -> Vec<String>;
+    /// Names of the metrics it computes from the records.
+    fn metric_names(&self) -> &'static [&'static str];
+    /// Its metrics for a finished run.
+    fn metrics(&self, cfg: &Config, run: &Records) -> Result<Vec<(&'static str, Value)>, KeyError>;
+}
+
+/// A behaviour driven for one robot, its types erased: the agent hands it the tick's
+/// decoded radio messages and committed decisions, it fills the command and its notes.
+pub trait Brain: Send {
+    /// One tick; messages of other kinds are ignored.
+    fn step(
+        &mut self,
+        obs: &Observation,
+        heard: &mut Vec<Heard<RadioMsg>>,
+        decisions: &[Decision],
+        cmd: &mut Command,
+        notes: &mut Vec<Note>,
+    );
+}
+
+struct Entry<B>(PhantomData<fn() -> B>);
+
+fn parse<B: Behaviour>(params: &toml::Table) -> Result<B::Params, KeyError> {
+    serde_path_to_error::deserialize::<_, B::Params>(toml::Value::Table(params.clone())).map_err(
+        |e| {
+            let path = e.path().to_string();
+            let key = if path.is_empty() || path == "." {
+                "behaviour".to_string()
+            } else {
+                format!("behaviour.{}", path.trim_start_matches('.'))
+            };
+            (
+                key,
+                swarmrt_scenario::error::one_line(&e.inner().to_string()),
+            )
+        },
+    )
+}
+
+impl<B: Enveloped> Plugin for Entry<B> {
+    fn kind(&self) -> &'static str {
+        B::KIND
+    }
+
+    fn resolve(&self, params: &toml::Table, cfg: &Config) -> Result<toml::Table, KeyError> {
+        let p = parse::<B>(params)?;
+        p.validate(cfg)?;
+        Ok(toml::Table::try_from(&p).expect("parameters always serialize"))
+    }
+
+    fn brain(&self, cfg: &Config, id: u32) -> Result<Box<dyn Brain>, KeyError> {
+        let p = parse::<B>(&cfg.behaviour.params)?;
+        Ok(Box::new(Driver::<B> {
+            behaviour: B::new(cfg, &p, id),
+            inbox: Vec::new(),
+            act: Act::default(),
+        }))
+    }
+
+    fn keys(&self) -> Vec<String> {
+        toml::Table::try_from(B::Params::default())
+            .expect("parameters always serialize")
+            .keys()
+            .map(|k| format!("behaviour.{k}"))
+            .collect()
+    }
+
+    fn metric_names(&self) -> &'static [&'static str] {
+        B::METRICS
+    }
+
+    fn metrics(&self, cfg: &Config, run: &Records) -> Result<Vec<(&'static str, Value)>, KeyError> {
+        let p = parse::<B>(&cfg.behaviour.params)?;
+        Ok(B::metrics(cfg, &p, run))
+    }
+}
+
+struct Driver<B: Behaviour> {
+    behaviour: B,
+    inbox: Vec<Heard<B::Msg>>,
+    act: Act<B::Msg, B::Note>,
+}
+
+impl<B: Enveloped> Brain for Driver<B> {
+    fn step(
+        &mut self,
+        obs: &Observation,
+        heard: &mut Vec<Heard<RadioMsg>>,
+        decisions: &[Decision],
+        cmd: &mut Command,
+        notes: &mut Vec<Note>,
+    ) {
+        for d in decisions {
+            self.behaviour.apply(d);
+        }
+        self.inbox.clear();
+        self.inbox.extend(heard.drain(..).filter_map(|h| {
+            Some(Heard {
+                src: h.src,
+                sent_tick: h.sent_tick,
+                msg: B::unwrap_msg(h.msg)?,
+            })
+        }));
+        self.act.reset();
+        self.behaviour.step(obs, &self.inbox, &mut self.act);
+        cmd.v = self.act.v;
+        cmd.omega = self.act.omega;
+        cmd.lidar_on = self.act.lidar_on as u8;
+        let (frames, mine) = self.act.drain();
+        for (dst, msg) in frames {
+            // A full outbox drops the frame, as the radio would.
+            let _ = cmd.push_frame(dst, &B::wrap_msg(msg));
+        }
+        notes.extend(mine.map(B::wrap_note));
+    }
+}
+
+/// The behaviour named by `cfg.behaviour.kind`.
+pub fn plugin(kind: &str) -> Option<&'static dyn Plugin> {
+    BEHAVIOURS.iter().copied().find(|p| p.kind() == kind)
+}
+
+/// `behaviour.kind` of every registered behaviour, in registry order.
+pub fn kinds() -> Vec<&'static str> {
+    BEHAVIOURS.iter().map(|p| p.kind()).collect()
+}
+
+fn unknown_kind(kind: &str) -> KeyError {
+    let names: Vec<String> = kinds().iter().map(|k| format!("`{k}`")).collect();
+    (
+        "behaviour.kind".to_string(),
+        format!(
+            "unknown behaviour `{kind}`, expected one of {}",
+            names.join(", ")
+        ),
+    )
+}
+
+/// Resolves `[behaviour]` in place: its parameters parsed, defaulted and validated by the
+/// behaviour that owns them, so `cfg.to_toml()` writes them all. `file` names the config in
+/// the error.
+pub fn resolve(cfg: &mut Config, file: &str) -> Result<(), ConfigError> {
+    let section: &BehaviourSection = &cfg.behaviour;
+    let resolved = plugin(&section.kind)
+        .ok_or_else(|| unknown_kind(&section.kind))
+        .and_then(|p| p.resolve(&section.params, cfg))
+        .map_err(|(key, message)| ConfigError::new(file, key, message))?;
+    cfg.behaviour.params = resolved;
+    Ok(())
+}
+
+/// Loads a config as a robot runs it: [`Config::load`], then [`resolve`].
+pub fn load(path: &std::path::Path, overrides: &[String]) -> Result<Config, ConfigError> {
+    let mut cfg = Config::load(path, overrides)?;
+    resolve(&mut cfg, &path.display().to_string())?;
+    Ok(cfg)
+}
+
+/// [`load`] from text (named `file` in errors).
+pub fn from_toml_str(file: &str, text: &str, overrides: &[String]) -> Result<Config, ConfigError> {
+    let mut cfg = Config::from_toml_str(file, text, overrides)?;
+    resolve(&mut cfg, file)?;
+    Ok(cfg)
+}
+
+/// Robot `id`'s brain for this scenario; `Err` for a `[behaviour]` no behaviour accepts.
+pub fn brain(cfg: &Config, id: u32) -> Result<Box<dyn Brain>, KeyError> {
+    plugin(&cfg.behaviour.kind)
+        .ok_or_else(|| unknown_kind(&cfg.behaviour.kind))?
+        .brain(cfg, id)
+}
+
+/// Every `[behaviour]` key of every behaviour (`behaviour.<key>`), sorted, without repeats.
+pub fn param_keys() -> Vec<String> {
+    let mut keys: Vec<String> = BEHAVIOURS.iter().flat_map(|p| p.keys()).collect();
+    keys.sort();
+    keys.dedup();
+    keys
+}
+
+impl RadioMsg {
+    /// Decodes a payload; `None` for bytes that are not a valid message (counted, not fatal).
+    pub fn decode(bytes: &[u8]) -> Option<RadioMsg> {
+        postcard::from_bytes(bytes).ok()
+    }
+}
+
+/// How the consensus layer's notes look in the record: `{"consensus": {...}}`.
+#[derive(Serialize)]
+#[serde(rename_all = "snake_case")]
+enum TaggedNote<'a> {
+    Consensus(&'a ConsensusNote),
+}
+
+impl Note {
+    /// True when the robot says it is the leader now (the target of a `"leader"` fault).
+    pub fn claims_leadership(&self) -> bool {
+        matches!(self, Note::Consensus(c) if c.claims_leadership())
+    }
+
+    /// The note for `events.jsonl`: a behaviour's note as itself, a consensus note tagged
+    /// `consensus`.
+    pub fn to_json(&self) -> String {
+        let json = match self {
+            Note::Consensus(c) => serde_json::to_string(&TaggedNote::Consensus(c)),
+            other => other.behaviour_json(),
+        };
+        json.expect("notes always serialize")
+    }
+}
+
+fn read_notes(report: &[u8]) -> Result<Vec<RecordedNote>, &'static str> {
+    if report.is_empty() {
+        return Ok(Vec::new());
+    }
+    let notes: Vec<Note> = postcard::from_bytes(report).map_err(|_| "malformed report")?;
+    Ok(notes
+        .iter()
+        .map(|n| RecordedNote {
+            json: NoteJson::new(n.to_json()).expect("a note renders as one JSON value"),
+            claims_leadership: n.claims_leadership(),
+        })
+        .collect())
+}
+
+/// The robots' vocabulary as the world checks it.
+pub const VOCABULARY: Vocabulary = Vocabulary {
+    check_frame: |bytes| RadioMsg::decode(bytes).is_some(),
+    read_notes,
+};
+
+/// Writes the envelopes, the [`Enveloped`] impls and the list from one line per behaviour.
+macro_rules! registry {
+    ($($variant:ident => $behaviour:ty),+ $(,)?) => {
+        /// A message in a radio frame: one variant per behaviour, then the consensus layer's.
+        #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+        pub enum RadioMsg {
+            $(
+                #[doc = concat!("A message of `", stringify!($behaviour), "`.")]
+                $variant(<$behaviour as Behaviour>::Msg),
+            )+
+            /// Election, replicated log and leader choice ([`crate::consensus`]).
+            Consensus(ConsensusMsg),
+        }
+
+        /// A note a robot reports: one variant per behaviour, then the consensus layer's.
+        #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+        pub enum Note {
+            $(
+                #[doc = concat!("A note of `", stringify!($behaviour), "`.")]
+                $variant(<$behaviour as Behaviour>::Note),
+            )+
+            /// Consensus state changes and log events.
+            Consensus(ConsensusNote),
+        }
+
+        impl Note {
+            fn behaviour_json(&self) -> serde_json::Result<String> {
+                match self {
+                    $(Note::$variant(n) => serde_json::to_string(n),)+
+                    Note::Consensus(c) => serde_json::to_string(c),
+                }
+            }
+        }
+
+        $(
+            impl Enveloped for $behaviour {
+                fn wrap_msg(msg: Self::Msg) -> RadioMsg {
+                    RadioMsg::$variant(msg)
+                }
+                fn unwrap_msg(msg: RadioMsg) -> Option<Self::Msg> {
+                    match msg {
+                        RadioMsg::$variant(m) => Some(m),
+                        _ => None,
+                    }
+                }
+                fn wrap_note(note: Self::Note) -> Note {
+                    Note::$variant(note)
+                }
+            }
+        )+
+
+        /// Every behaviour, in registry order.
+        pub static BEHAVIOURS: &[&dyn Plugin] = &[$(&Entry::<$behaviour>(PhantomData)),+];
+    };
+}
+
+// The list. Keep `Goto` first and `Formation` second: their envelope variants are 0 and 1.
+registry! {
+    Goto => goto::Goto,
+    Formation => formation::Formation,
+}

@@ -1,0 +1,120 @@
+//! The run records' schema: what the world writes to `trajectory.csv` and `events.jsonl` and
+//! every reader (metrics, the consensus checker, plots) reads back. Columns are found by name,
+//! so a reader never depends on their order.
+
+use serde_json::Value;
+
+/// Header line of `trajectory.csv`.
+pub const TRAJECTORY_HEADER: &str = "tick,id,x,y,theta,v,omega,lidar,state\n";
+
+/// One robot at one tick (a `trajectory.csv` row).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Row {
+    /// Tick.
+    pub tick: u64,
+    /// Robot id.
+    pub id: u32,
+    /// x, metres.
+    pub x: f64,
+    /// y, metres.
+    pub y: f64,
+    /// Heading, radians.
+    pub theta: f64,
+    /// Lidar on for this tick's observation.
+    pub lidar: bool,
+    /// Still active (not down, dead, frozen or restarting).
+    pub active: bool,
+}
+
+/// Where each field of [`Row`] is in a `trajectory.csv` line, found from its header.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Columns {
+    tick: usize,
+    id: usize,
+    x: usize,
+    y: usize,
+    theta: usize,
+    lidar: usize,
+    state: usize,
+    count: usize,
+}
+
+impl Columns {
+    /// The columns of a header line; `Err` names a missing column.
+    pub fn from_header(header: &str) -> Result<Columns, String> {
+        let names: Vec<&str> = header.trim_end().split(',').collect();
+        let at = |name: &str| {
+            names
+                .iter()
+                .position(|n| *n == name)
+                .ok_or_else(|| format!("trajectory.csv has no `{name}` column"))
+        };
+        Ok(Columns {
+            tick: at("tick")?,
+            id: at("id")?,
+            x: at("x")?,
+            y: at("y")?,
+            theta: at("theta")?,
+            lidar: at("lidar")?,
+            state: at("state")?,
+            count: names.len(),
+        })
+    }
+
+    /// One data line, `None` when it is not a whole row.
+    pub fn parse(&self, line: &str) -> Option<Row> {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != self.count {
+            return None;
+        }
+        Some(Row {
+            tick: f[self.tick].parse().ok()?,
+            id: f[self.id].parse().ok()?,
+            x: f[self.x].parse().ok()?,
+            y: f[self.y].parse().ok()?,
+            theta: f[self.theta].parse().ok()?,
+            lidar: f[self.lidar] == "1",
+            active: f[self.state] == "active",
+        })
+    }
+}
+
+/// A run's records, parsed.
+#[derive(Debug, Clone, Default)]
+pub struct Records {
+    /// Rows grouped by tick, in tick order; each holds every robot, in id order.
+    pub ticks: Vec<Vec<Row>>,
+    /// Every event line, parsed.
+    pub events: Vec<Value>,
+}
+
+impl Records {
+    /// Parses the text of `trajectory.csv` and `events.jsonl` (lines that are not whole are
+    /// skipped, as a crashed run's last line may be).
+    pub fn parse(trajectory: &str, events: &str) -> Result<Records, String> {
+        let mut lines = trajectory.lines();
+        let cols = Columns::from_header(lines.next().unwrap_or(""))?;
+        let mut ticks: Vec<Vec<Row>> = Vec::new();
+        for row in lines.filter_map(|l| cols.parse(l)) {
+            match ticks.last_mut() {
+                Some(last) if last[0].tick == row.tick => last.push(row),
+                _ => ticks.push(vec![row]),
+            }
+        }
+        let events = events
+            .lines()
+            .filter_map(|l| serde_json::from_str(l).ok())
+            .collect();
+        Ok(Records { ticks, events })
+    }
+
+    /// Events of one kind (`"event"` field).
+    pub fn events_of<'a>(&'a self, kind: &'a str) -> impl Iterator<Item = &'a Value> {
+        self.events.iter().filter(move |e| e["event"] == kind)
+    }
+
+    /// The notes robots reported (`"note"` events' `note` field), in record order.
+    pub fn notes(&self) -> impl Iterator<Item = &Value> {
+        self.events_of("note").map(|e| &e["note"])
+    }
+}

@@ -1,0 +1,403 @@
+//! The scenario config (DESIGN section 8): TOML, SI units, unknown keys refused.
+//!
+//! Loading is three steps so every error can name the file, the key and what was expected:
+//! parse the TOML into a table, apply `--set key=value` overrides to that table, then
+//! deserialize (with the failing key path) and [`Config::validate`] the bounds. A section
+//! whose every key has a default is `#[serde(default)]` with one `impl Default`; sections with
+//! required keys (`scenario.name`, `map.bounds`, `robots.count`, ...) default key by key.
+
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+use crate::behaviour::BehaviourSection;
+use crate::consensus::ConsensusConfig;
+use crate::error::{ConfigError, one_line};
+use crate::faults::FaultsConfig;
+use crate::overrides::apply_override;
+
+/// A whole scenario.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    /// Name, length, time step and seed.
+    pub scenario: Scenario,
+    /// Bounds, goal and obstacles.
+    pub map: MapConfig,
+    /// Robot body, limits, start layout and sensors.
+    pub robots: RobotsConfig,
+    /// The radio medium.
+    #[serde(default)]
+    pub radio: RadioConfig,
+    /// Which behaviour every robot runs; its parameters are the behaviour's own business.
+    #[serde(default)]
+    pub behaviour: BehaviourSection,
+    /// Scheduled faults.
+    #[serde(default)]
+    pub faults: FaultsConfig,
+    /// Consensus among the robots (none when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub consensus: Option<ConsensusConfig>,
+}
+
+/// `[scenario]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Scenario name, used in the run directory name.
+    pub name: String,
+    /// The run seed: every random draw derives from it.
+    #[serde(default)]
+    pub seed: u64,
+    /// Number of ticks to run at most.
+    pub ticks: u64,
+    /// Seconds per tick.
+    #[serde(default = "default_dt")]
+    pub dt: f64,
+    /// End the run early once every robot has reached the goal or is down or dead.
+    #[serde(default = "yes")]
+    pub stop_when_done: bool,
+    /// A robot that has not answered within this many milliseconds is logged as late.
+    #[serde(default = "default_deadline_ms")]
+    pub deadline_ms: u64,
+    /// A robot that has answered nothing for this many milliseconds (a hung or externally
+    /// stopped process) is marked dead and killed, so one stuck robot cannot hang the run.
+    #[serde(default = "default_unresponsive_ms")]
+    pub unresponsive_ms: u64,
+}
+
+/// `[map]`: the arena. Its bounds are walls.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapConfig {
+    /// `[min_x, min_y, max_x, max_y]` in metres.
+    pub bounds: [f64; 4],
+    /// The target area.
+    pub goal: Goal,
+    /// Circular obstacles.
+    #[serde(default)]
+    pub circles: Vec<CircleObstacle>,
+    /// Axis-aligned rectangular obstacles.
+    #[serde(default)]
+    pub rectangles: Vec<RectObstacle>,
+    /// Convex polygon obstacles (points counter-clockwise or clockwise).
+    #[serde(default)]
+    pub polygons: Vec<PolygonObstacle>,
+}
+
+/// The goal: a disc robots try to reach.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Goal {
+    /// Centre x in metres.
+    pub x: f64,
+    /// Centre y in metres.
+    pub y: f64,
+    /// A robot whose centre is within this radius has reached the goal.
+    pub radius: f64,
+}
+
+/// A circle obstacle.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CircleObstacle {
+    /// Centre x.
+    pub x: f64,
+    /// Centre y.
+    pub y: f64,
+    /// Radius.
+    pub r: f64,
+}
+
+/// An axis-aligned rectangle obstacle.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RectObstacle {
+    /// Left edge.
+    pub x_min: f64,
+    /// Bottom edge.
+    pub y_min: f64,
+    /// Right edge.
+    pub x_max: f64,
+    /// Top edge.
+    pub y_max: f64,
+}
+
+/// A convex polygon obstacle.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PolygonObstacle {
+    /// Vertices `[x, y]`, at least three.
+    pub points: Vec<[f64; 2]>,
+}
+
+/// `[robots]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotsConfig {
+    /// Number of robots (one process each).
+    pub count: u32,
+    /// Body radius in metres.
+    #[serde(default = "default_radius")]
+    pub radius: f64,
+    /// Forward speed limit in m/s.
+    #[serde(default = "default_max_speed")]
+    pub max_speed: f64,
+    /// Turn-rate limit in rad/s.
+    #[serde(default = "default_max_turn_rate")]
+    pub max_turn_rate: f64,
+    /// Where robots start.
+    #[serde(default)]
+    pub start: StartLayout,
+    /// The lidar.
+    #[serde(default)]
+    pub lidar: LidarConfig,
+    /// The range-and-bearing sensor.
+    #[serde(default)]
+    pub range_bearing: RangeBearingConfig,
+    /// The goal sensor (camera cone).
+    #[serde(default)]
+    pub goal_sensor: GoalSensorConfig,
+    /// Sensor noise.
+    #[serde(default)]
+    pub noise: NoiseConfig,
+}
+
+/// Start layout: derived from the count, so changing `robots.count` alone stays valid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartLayout {
+    /// Centre of the grid of start positions, x.
+    pub x: f64,
+    /// Centre of the grid, y.
+    pub y: f64,
+    /// Distance between neighbouring start positions.
+    pub spacing: f64,
+    /// Initial heading of every robot, degrees.
+    #[serde(default)]
+    pub heading_deg: f64,
+}
+
+impl Default for StartLayout {
+    fn default() -> Self {
+        StartLayout {
+            x: 2.0,
+            y: 2.0,
+            spacing: 0.8,
+            heading_deg: 0.0,
+        }
+    }
+}
+
+/// The lidar: `rays` beams evenly over `fov_deg`, centred on the heading.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LidarConfig {
+    /// Number of rays (1..=64).
+    pub rays: u32,
+    /// Field of view in degrees (0..=360).
+    pub fov_deg: f64,
+    /// Maximum range in metres.
+    pub range: f64,
+}
+
+impl Default for LidarConfig {
+    fn default() -> Self {
+        LidarConfig {
+            rays: 16,
+            fov_deg: 180.0,
+            range: 3.0,
+        }
+    }
+}
+
+impl LidarConfig {
+    /// Angle of ray `k` relative to the heading: evenly over the field of view, ray 0 at
+    /// `-fov/2`; a full circle does not repeat its first ray at the end.
+    pub fn ray_angle(&self, k: usize) -> f64 {
+        let rays = self.rays.max(1) as usize;
+        if rays == 1 {
+            return 0.0;
+        }
+        let fov = self.fov_deg.to_radians();
+        let step = if self.fov_deg >= 360.0 {
+            fov / rays as f64
+        } else {
+            fov / (rays - 1) as f64
+        };
+        -fov / 2.0 + step * k as f64
+    }
+}
+
+/// The e-puck style range-and-bearing sensor.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RangeBearingConfig {
+    /// Neighbours within this distance are reported.
+    pub range: f64,
+}
+
+impl Default for RangeBearingConfig {
+    fn default() -> Self {
+        RangeBearingConfig { range: 3.0 }
+    }
+}
+
+/// The goal sensor: sees the goal inside a cone and a range.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GoalSensorConfig {
+    /// Maximum distance in metres.
+    pub range: f64,
+    /// Cone width in degrees, centred on the heading.
+    pub fov_deg: f64,
+}
+
+impl Default for GoalSensorConfig {
+    fn default() -> Self {
+        GoalSensorConfig {
+            range: 1000.0,
+            fov_deg: 360.0,
+        }
+    }
+}
+
+/// Gaussian sensor noise (standard deviations); zero means exact.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct NoiseConfig {
+    /// Position noise in metres.
+    pub pose: f64,
+    /// Heading noise in radians.
+    pub heading: f64,
+    /// Lidar range noise in metres.
+    pub lidar: f64,
+}
+
+/// How frames are lost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LossModel {
+    /// Each copy is lost independently with probability `radio.loss`.
+    #[default]
+    Bernoulli,
+    /// Two-state bursty loss per link, as netem's `loss gemodel p r 1-h 1-k`.
+    GilbertElliott,
+}
+
+/// `[radio]` (DESIGN section 4).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RadioConfig {
+    /// Frames reach robots within this distance (metres).
+    pub range: f64,
+    /// Bernoulli drop probability per copy.
+    pub loss: f64,
+    /// Which loss model applies.
+    pub loss_model: LossModel,
+    /// Gilbert-Elliott: probability Good -> Bad per copy on a link.
+    pub ge_p: f64,
+    /// Gilbert-Elliott: probability Bad -> Good per copy on a link (mean burst = 1/r).
+    pub ge_r: f64,
+    /// Gilbert-Elliott: loss probability in the Good state (netem's 1-k).
+    pub ge_loss_good: f64,
+    /// Gilbert-Elliott: loss probability in the Bad state (netem's 1-h).
+    pub ge_loss_bad: f64,
+    /// Extra ticks between sending and delivery (0 = delivered with the next observation).
+    pub delay_ticks: u32,
+    /// Uniform extra delay in 0..=jitter_ticks per copy (this is what reorders frames).
+    pub jitter_ticks: u32,
+    /// Most frames one robot may send per tick; more are dropped as `capacity`.
+    pub capacity: u32,
+    /// When true, obstacles between sender and receiver block a frame.
+    pub line_of_sight: bool,
+}
+
+impl Default for RadioConfig {
+    fn default() -> Self {
+        RadioConfig {
+            range: 10.0,
+            loss: 0.0,
+            loss_model: LossModel::Bernoulli,
+            ge_p: 0.05,
+            ge_r: 0.25,
+            ge_loss_good: 0.0,
+            ge_loss_bad: 1.0,
+            delay_ticks: 0,
+            jitter_ticks: 0,
+            capacity: 4,
+            line_of_sight: false,
+        }
+    }
+}
+
+fn default_dt() -> f64 {
+    0.1
+}
+fn yes() -> bool {
+    true
+}
+fn default_deadline_ms() -> u64 {
+    2000
+}
+fn default_unresponsive_ms() -> u64 {
+    30_000
+}
+fn default_radius() -> f64 {
+    0.15
+}
+fn default_max_speed() -> f64 {
+    1.0
+}
+fn default_max_turn_rate() -> f64 {
+    3.0
+}
+
+/// Largest coordinate magnitude in metres: keeps grid arithmetic far from overflow.
+pub const MAX_COORD: f64 = 1e6;
+
+/// Upper bound on robots in one run (process mode is limited by the machine long before).
+pub const MAX_ROBOTS: u32 = 100_000;
+
+impl Config {
+    /// Reads `path`, applies `overrides` (`key=value`) and validates. `[behaviour]` stays
+    /// opaque: resolve it with the behaviour registry (`swarmrt_agent::registry`).
+    pub fn load(path: &Path, overrides: &[String]) -> Result<Config, ConfigError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| ConfigError::new(&file, "", format!("cannot read: {e}")))?;
+        Self::from_toml_str(&file, &text, overrides)
+    }
+
+    /// Parses `text` (named `file` in errors), applies `overrides` and validates.
+    pub fn from_toml_str(
+        file: &str,
+        text: &str,
+        overrides: &[String],
+    ) -> Result<Config, ConfigError> {
+        let mut table: toml::Table = toml::from_str(text).map_err(|e| {
+            ConfigError::new(
+                file,
+                "",
+                format!("not valid TOML: {}", one_line(&e.to_string())),
+            )
+        })?;
+        for ov in overrides {
+            apply_override(&mut table, ov)
+                .map_err(|(key, message)| ConfigError::new("--set", key, message))?;
+        }
+        let config: Config =
+            serde_path_to_error::deserialize(toml::Value::Table(table)).map_err(|e| {
+                let key = e.path().to_string().trim_start_matches('.').to_string();
+                ConfigError::new(file, key, one_line(&e.inner().to_string()))
+            })?;
+        config
+            .validate()
+            .map_err(|(key, message)| ConfigError::new(file, key, message))?;
+        Ok(config)
+    }
+
+    /// The resolved config as TOML: running it again reproduces the run.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a Config always serializes")
+    }
+}

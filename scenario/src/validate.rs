@@ -1,0 +1,203 @@
+//! Bounds checks: every value is checked before any process starts, and a failure names the
+//! key and what was expected (with the bounds). Behaviours check their own `[behaviour]`
+//! parameters with the same helpers.
+
+use crate::config::{Config, MAX_COORD, MAX_ROBOTS};
+use crate::error::KeyError;
+use swarmrt_protocol::{MAX_LIDAR_RAYS, MAX_OUTBOX};
+
+impl Config {
+    /// Checks every value against its bounds; the error names the key and the bounds.
+    /// `[behaviour]` is opaque here: the behaviour that owns it validates it.
+    pub fn validate(&self) -> Result<(), KeyError> {
+        let s = &self.scenario;
+        check(!s.name.is_empty(), "scenario.name", "a non-empty name")?;
+        check(
+            s.name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
+            "scenario.name",
+            "letters, digits, '_' or '-' only (it becomes a directory name)",
+        )?;
+        range_u64("scenario.ticks", s.ticks, 1, 100_000_000)?;
+        range_f("scenario.dt", s.dt, 1e-4, 10.0)?;
+        range_u64("scenario.deadline_ms", s.deadline_ms, 1, 3_600_000)?;
+        range_u64(
+            "scenario.unresponsive_ms",
+            s.unresponsive_ms,
+            s.deadline_ms,
+            86_400_000,
+        )?;
+
+        let m = &self.map;
+        for (i, v) in m.bounds.iter().enumerate() {
+            range_f(&format!("map.bounds[{i}]"), *v, -MAX_COORD, MAX_COORD)?;
+        }
+        check(
+            m.bounds[2] > m.bounds[0] && m.bounds[3] > m.bounds[1],
+            "map.bounds",
+            "[min_x, min_y, max_x, max_y] with max > min",
+        )?;
+        finite("map.goal.x", m.goal.x)?;
+        finite("map.goal.y", m.goal.y)?;
+        range_f("map.goal.radius", m.goal.radius, 1e-3, 1e6)?;
+        check(
+            self.inside_bounds(m.goal.x, m.goal.y, 0.0),
+            "map.goal",
+            "a goal inside map.bounds",
+        )?;
+        // Obstacles stay within MAX_COORD like the bounds: a rectangle from -1e308 to 1e308
+        // is finite, but its width is not, and the map's BVH panics on it.
+        for (i, c) in m.circles.iter().enumerate() {
+            range_f(&format!("map.circles[{i}].x"), c.x, -MAX_COORD, MAX_COORD)?;
+            range_f(&format!("map.circles[{i}].y"), c.y, -MAX_COORD, MAX_COORD)?;
+            range_f(&format!("map.circles[{i}].r"), c.r, 1e-3, 1e6)?;
+        }
+        for (i, r) in m.rectangles.iter().enumerate() {
+            for (k, v) in [
+                ("x_min", r.x_min),
+                ("y_min", r.y_min),
+                ("x_max", r.x_max),
+                ("y_max", r.y_max),
+            ] {
+                range_f(
+                    &format!("map.rectangles[{i}].{k}"),
+                    v,
+                    -MAX_COORD,
+                    MAX_COORD,
+                )?;
+            }
+            check(
+                r.x_max > r.x_min && r.y_max > r.y_min,
+                &format!("map.rectangles[{i}]"),
+                "x_max > x_min and y_max > y_min",
+            )?;
+        }
+        for (i, p) in m.polygons.iter().enumerate() {
+            check(
+                p.points.len() >= 3,
+                &format!("map.polygons[{i}].points"),
+                "at least 3 points",
+            )?;
+            for (j, pt) in p.points.iter().enumerate() {
+                for (k, v) in pt.iter().enumerate() {
+                    let key = format!("map.polygons[{i}].points[{j}][{k}]");
+                    range_f(&key, *v, -MAX_COORD, MAX_COORD)?;
+                }
+            }
+        }
+
+        let r = &self.robots;
+        range_u64("robots.count", r.count as u64, 1, MAX_ROBOTS as u64)?;
+        range_f("robots.radius", r.radius, 1e-3, 100.0)?;
+        range_f("robots.max_speed", r.max_speed, 0.0, 1000.0)?;
+        range_f("robots.max_turn_rate", r.max_turn_rate, 0.0, 1000.0)?;
+        range_f("robots.start.x", r.start.x, -MAX_COORD, MAX_COORD)?;
+        range_f("robots.start.y", r.start.y, -MAX_COORD, MAX_COORD)?;
+        range_f("robots.start.spacing", r.start.spacing, 2.0 * r.radius + 1e-6, 1e6)
+            .map_err(|(k, _)| {
+                (
+                    k,
+                    format!(
+                        "a value above 2 * robots.radius = {} so robots do not start overlapping, got {}",
+                        2.0 * r.radius,
+                        short(r.start.spacing)
+                    ),
+                )
+            })?;
+        finite("robots.start.heading_deg", r.start.heading_deg)?;
+        range_u64(
+            "robots.lidar.rays",
+            r.lidar.rays as u64,
+            1,
+            MAX_LIDAR_RAYS as u64,
+        )?;
+        range_f("robots.lidar.fov_deg", r.lidar.fov_deg, 0.0, 360.0)?;
+        range_f("robots.lidar.range", r.lidar.range, 1e-3, 1e6)?;
+        range_f(
+            "robots.range_bearing.range",
+            r.range_bearing.range,
+            0.0,
+            1e6,
+        )?;
+        range_f("robots.goal_sensor.range", r.goal_sensor.range, 0.0, 1e9)?;
+        range_f(
+            "robots.goal_sensor.fov_deg",
+            r.goal_sensor.fov_deg,
+            0.0,
+            360.0,
+        )?;
+        range_f("robots.noise.pose", r.noise.pose, 0.0, 100.0)?;
+        range_f("robots.noise.heading", r.noise.heading, 0.0, 10.0)?;
+        range_f("robots.noise.lidar", r.noise.lidar, 0.0, 100.0)?;
+
+        let q = &self.radio;
+        range_f("radio.range", q.range, 0.0, 1e9)?;
+        range_f("radio.loss", q.loss, 0.0, 1.0)?;
+        range_f("radio.ge_p", q.ge_p, 0.0, 1.0)?;
+        range_f("radio.ge_r", q.ge_r, 0.0, 1.0)?;
+        range_f("radio.ge_loss_good", q.ge_loss_good, 0.0, 1.0)?;
+        range_f("radio.ge_loss_bad", q.ge_loss_bad, 0.0, 1.0)?;
+        range_u64("radio.delay_ticks", q.delay_ticks as u64, 0, 10_000)?;
+        range_u64("radio.jitter_ticks", q.jitter_ticks as u64, 0, 10_000)?;
+        range_u64("radio.capacity", q.capacity as u64, 1, MAX_OUTBOX as u64)?;
+
+        self.faults.validate(self.robots.count)?;
+
+        if let Some(c) = &self.consensus {
+            c.validate(self)?;
+        }
+
+        Ok(())
+    }
+
+    fn inside_bounds(&self, x: f64, y: f64, margin: f64) -> bool {
+        let b = &self.map.bounds;
+        x - margin > b[0] && x + margin < b[2] && y - margin > b[1] && y + margin < b[3]
+    }
+}
+
+/// `Ok` when `ok`, else an error at `key` saying what was `expected`.
+pub fn check(ok: bool, key: &str, expected: &str) -> Result<(), KeyError> {
+    if ok {
+        Ok(())
+    } else {
+        Err((key.to_string(), format!("expected {expected}")))
+    }
+}
+
+/// `v` must be finite.
+pub fn finite(key: &str, v: f64) -> Result<(), KeyError> {
+    check(
+        v.is_finite(),
+        key,
+        &format!("a finite number, got {}", short(v)),
+    )
+}
+
+/// `v` must be finite and in `[lo, hi]`.
+pub fn range_f(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), KeyError> {
+    check(
+        v.is_finite() && v >= lo && v <= hi,
+        key,
+        &format!("a number in [{lo}, {hi}], got {}", short(v)),
+    )
+}
+
+/// `v` for an error message: `-1e308`, not its 309 digits.
+pub fn short(v: f64) -> String {
+    if v.is_finite() && v != 0.0 && !(1e-6..1e15).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
+    }
+}
+
+/// `v` must be in `[lo, hi]`.
+pub fn range_u64(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), KeyError> {
+    check(
+        v >= lo && v <= hi,
+        key,
+        &format!("an integer in [{lo}, {hi}], got {v}"),
+    )
+}
