@@ -10,7 +10,6 @@ pub mod config;
 pub mod consensus_check;
 pub mod error;
 pub mod fuzz;
-pub mod in_process;
 pub mod metrics;
 pub mod plot;
 pub mod processes;

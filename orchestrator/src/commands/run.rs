@@ -10,7 +10,7 @@ use serde_json::json;
 use crate::cli::RunArgs;
 use crate::config::load_config;
 use crate::error::{SwarmError, SwarmResult};
-use crate::{in_process, processes, run_dir};
+use crate::{processes, run_dir};
 
 fn progress_bar(total: u64) -> ProgressBar {
     let pb = ProgressBar::with_draw_target(
@@ -57,7 +57,13 @@ pub fn run(
 
     let failure: Option<String>;
     if args.in_process {
-        let (world, interrupted) = in_process::run(&cfg, &dir, &interrupt, |t| pb.set_position(t))?;
+        let (world, interrupted) = swarmrt_harness::lockstep::run_recorded(
+            &cfg,
+            &dir,
+            || interrupt.try_recv().is_ok(),
+            |t| pb.set_position(t),
+        )
+        .map_err(anyhow::Error::from)?;
         merge(
             &mut metrics,
             serde_json::to_value(world).map_err(anyhow::Error::from)?,

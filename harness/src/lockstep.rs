@@ -1,0 +1,115 @@
+//! The one in-process lock-step loop: the world core and every robot's core, called in the
+//! order the process shells call them, so both modes write byte-identical records.
+
+use swarmrt_agent::Agent;
+use swarmrt_protocol::{Command, Observation, RobotState};
+use swarmrt_scenario::Config;
+use swarmrt_world::map::MapError;
+use swarmrt_world::{Event, ProcessSignal, World};
+
+/// A world and its robots, stepped tick by tick.
+pub struct Lockstep {
+    cfg: Config,
+    world: World,
+    agents: Vec<Agent>,
+    obs: Vec<Observation>,
+    commands: Vec<Option<Command>>,
+}
+
+impl Lockstep {
+    /// The scenario at tick 0 (its `[behaviour]` resolved, e.g. by [`crate::load_config`]).
+    pub fn new(cfg: &Config) -> Result<Lockstep, MapError> {
+        let world = World::new(cfg, swarmrt_agent::registry::VOCABULARY)?;
+        let n = cfg.robots.count as usize;
+        Ok(Lockstep {
+            cfg: cfg.clone(),
+            world,
+            agents: (0..n as u32).map(|id| Agent::new(cfg, id)).collect(),
+            obs: vec![Observation::empty(0, 0); n],
+            commands: Vec::with_capacity(n),
+        })
+    }
+
+    /// The world.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The world, for events and faults injected from outside.
+    pub fn world_mut(&mut self) -> &mut World {
+        &mut self.world
+    }
+
+    /// The robots' cores.
+    pub fn agents(&self) -> &[Agent] {
+        &self.agents
+    }
+
+    /// The first phase of a tick: carry out the process faults due (there is no process to
+    /// signal: a kill or freeze already changed the world's state; a restart starts the
+    /// robot's brain afresh, as a new process would), then fill every observation.
+    pub fn observe(&mut self) {
+        for signal in self.world.take_signals() {
+            if let ProcessSignal::Restart { robot, incarnation } = signal {
+                self.agents[robot as usize] = Agent::fresh(&self.cfg, robot, incarnation);
+            }
+        }
+        self.world.observe(&mut self.obs);
+    }
+
+    /// The second phase: every robot whose process would run answers its observation.
+    pub fn think(&mut self) {
+        self.commands.clear();
+        self.commands
+            .extend(self.agents.iter_mut().zip(&self.obs).map(|(a, o)| {
+                RobotState::from_u8(o.state)
+                    .is_some_and(RobotState::expects_command)
+                    .then(|| a.step(o))
+            }));
+    }
+
+    /// The third phase: the world steps with the answers.
+    pub fn advance(&mut self) {
+        self.world.step(&self.commands);
+    }
+
+    /// One whole tick: [`Lockstep::observe`], [`Lockstep::think`], [`Lockstep::advance`].
+    pub fn step(&mut self) {
+        self.observe();
+        self.think();
+        self.advance();
+    }
+
+    /// The events since the last call, in the order they happened.
+    pub fn drain_events(&mut self) -> Vec<Event> {
+        self.world.drain_events()
+    }
+}
+
+/// Runs the scenario to the end (or until `stop` says so, asked every tick), recording
+/// `trajectory.csv` and `events.jsonl` into `dir`; `progress` gets each completed tick.
+/// Returns the world's metrics and whether it was stopped early.
+pub fn run_recorded(
+    cfg: &Config,
+    dir: &std::path::Path,
+    mut stop: impl FnMut() -> bool,
+    mut progress: impl FnMut(u64),
+) -> std::io::Result<(swarmrt_world::WorldMetrics, bool)> {
+    let mut run = Lockstep::new(cfg)
+        .map_err(|e| std::io::Error::other(format!("key `{}`: {}", e.key, e.message)))?;
+    let mut recorder = swarmrt_world::records::Recorder::create(dir)?;
+    let events = run.drain_events();
+    recorder.record(run.world.tick(), run.world.robots(), &events)?;
+    let mut stopped = false;
+    while !run.world.finished() {
+        if stop() {
+            stopped = true;
+            break;
+        }
+        run.step();
+        let events = run.drain_events();
+        recorder.record(run.world.tick(), run.world.robots(), &events)?;
+        progress(run.world.tick());
+    }
+    Ok((run.world.metrics(), stopped))
+}
