@@ -4,10 +4,9 @@
 use std::time::Duration;
 
 use iceoryx2::port::listener::ListenerWaitError;
-use iceoryx2::prelude::*;
 use swarmrt_protocol::ipc::{self, IpcError};
-use swarmrt_protocol::services::{EVENT_COMMAND, RunServices};
-use swarmrt_protocol::{Command, PROTOCOL_VERSION, RobotState};
+use swarmrt_protocol::services::RunServices;
+use swarmrt_protocol::{PROTOCOL_VERSION, RobotState};
 use swarmrt_scenario::Config;
 
 use crate::Agent;
@@ -80,28 +79,19 @@ pub enum Exit {
 /// `incarnation` is 0 for the first process of the robot and counts scheduled restarts.
 pub fn run(run: &RunServices, cfg: &Config, id: u32, incarnation: u32) -> Result<Exit, IpcError> {
     let node = ipc::node(run, &run.robot_node_name(id))?;
-    let services = ipc::open_services(&node, run)?;
-    let subscriber = services.observations.subscriber_builder().create()?;
-    let listener = services.observations_event.listener_builder().create()?;
-    let publisher = services.commands.publisher_builder().create()?;
-    let notifier = services
-        .commands_event
-        .notifier_builder()
-        .default_event_id(EventId::new(EVENT_COMMAND))
-        .create()?;
+    let ports = ipc::RobotPorts::open(&node, run)?;
 
     let mut agent = Agent::fresh(cfg, id, incarnation);
     let misbehave = misbehave_for(id);
     if let Some(m) = misbehave {
         tracing::warn!(?m, "test hook: this robot sends malformed commands");
     }
-    publisher.send_copy(Command::hello(id, std::process::id()))?;
-    notifier.notify()?;
+    ports.hello(id)?;
     tracing::debug!("hello sent");
 
     loop {
         // Drain every sample that arrived; each is one tick to answer, in order.
-        while let Some(sample) = subscriber.receive()? {
+        while let Some(sample) = ports.subscriber.receive()? {
             let header = *sample.user_header();
             if header.version != PROTOCOL_VERSION {
                 return Err(format!(
@@ -164,14 +154,13 @@ pub fn run(run: &RunServices, cfg: &Config, id: u32, incarnation: u32) -> Result
                     panic!("test hook: robot {id} panics at tick 20")
                 }
                 Some(Misbehave::Double) => {
-                    publisher.send_copy(cmd)?;
+                    ports.publisher.send_copy(cmd)?;
                 }
                 Some(Misbehave::Panic) | None => {}
             }
-            publisher.send_copy(cmd)?;
-            notifier.notify()?;
+            ports.send(cmd)?;
         }
-        match listener.timed_wait(|_| {}, IDLE_CHECK) {
+        match ports.listener.timed_wait(|_| {}, IDLE_CHECK) {
             Ok(_) => {}
             // A signal interrupted the wait: SIGTERM/SIGINT (checked below) or the SIGCONT
             // ending a freeze, after which Linux fails the wait with EINTR.

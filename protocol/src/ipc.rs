@@ -7,6 +7,10 @@
 //! lock-step no queue ever holds more than one sample per publisher, so overflow cannot drop
 //! anything, and a publisher never blocks on a subscriber that was SIGKILLed.
 
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2_bb_system_types::file_name::FileName;
 use iceoryx2_bb_system_types::path::Path as IoxPath;
@@ -202,4 +206,81 @@ pub fn open_commands_event(node: &Node<Svc>, run: &RunServices) -> Result<EventS
         .service_builder(&service_name(&run.commands())?)
         .event()
         .open()?)
+}
+
+/// The world's four ports: observations out (and their wake-up), commands in (and theirs).
+pub struct WorldPorts {
+    /// Publishes one sample per tick holding every robot's observation.
+    pub publisher: Publisher<Svc, [Observation], ObservationHeader>,
+    /// Wakes the robots after a publish.
+    pub notifier: Notifier<Svc>,
+    /// Commands from every robot.
+    pub commands: Subscriber<Svc, Command, ()>,
+    /// Woken by the robots (and the world's control thread).
+    pub listener: Listener<Svc>,
+}
+
+impl WorldPorts {
+    /// Opens the world's ports on the four services (as created by [`create_services`], or
+    /// opened by a benchmark that plays the world), for `slots` robots.
+    pub fn open(
+        observations: &ObservationService,
+        observations_event: &EventService,
+        commands: &CommandService,
+        commands_event: &EventService,
+        slots: usize,
+    ) -> Result<WorldPorts, IpcError> {
+        Ok(WorldPorts {
+            publisher: observations
+                .publisher_builder()
+                .initial_max_slice_len(slots)
+                .override_sample_preallocation(|_| OBSERVATION_SAMPLES)
+                .create()?,
+            notifier: observations_event.notifier_builder().create()?,
+            commands: commands.subscriber_builder().create()?,
+            listener: commands_event.listener_builder().create()?,
+        })
+    }
+}
+
+/// A robot's four ports: observations in (and their wake-up), its commands out (and theirs).
+pub struct RobotPorts {
+    /// Every robot's observations; a robot reads its own slot.
+    pub subscriber: Subscriber<Svc, [Observation], ObservationHeader>,
+    /// Woken by the world after each publish.
+    pub listener: Listener<Svc>,
+    /// This robot's commands.
+    pub publisher: Publisher<Svc, Command, ()>,
+    /// Wakes the world after each command.
+    pub notifier: Notifier<Svc>,
+}
+
+impl RobotPorts {
+    /// Opens the run's services from `node` and creates a robot's ports on them.
+    pub fn open(node: &Node<Svc>, run: &RunServices) -> Result<RobotPorts, IpcError> {
+        let services = open_services(node, run)?;
+        Ok(RobotPorts {
+            subscriber: services.observations.subscriber_builder().create()?,
+            listener: services.observations_event.listener_builder().create()?,
+            publisher: services.commands.publisher_builder().create()?,
+            notifier: services
+                .commands_event
+                .notifier_builder()
+                .default_event_id(EventId::new(crate::services::EVENT_COMMAND))
+                .create()?,
+        })
+    }
+
+    /// Sends `command` and wakes the world.
+    pub fn send(&self, command: Command) -> Result<(), IpcError> {
+        self.publisher.send_copy(command)?;
+        self.notifier.notify()?;
+        Ok(())
+    }
+
+    /// Says robot `id` is ready (its ports exist): the world binds the robot to this
+    /// publisher from now on.
+    pub fn hello(&self, id: u32) -> Result<(), IpcError> {
+        self.send(Command::hello(id, std::process::id()))
+    }
 }
