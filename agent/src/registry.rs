@@ -1,7 +1,8 @@
-//! Every behaviour a robot can run, listed once. Adding a behaviour is a new folder under
-//! `behaviours/` and one line in the `registry!` call at the bottom of this file: the line
-//! gives the behaviour its slot in the radio and note envelopes ([`RadioMsg`], [`Note`]),
-//! makes its `kind` loadable from a config, and its metrics computable from the records.
+//! The behaviour registry's machinery. The list itself is one `behaviours!` call in
+//! `behaviours/mod.rs`: adding a behaviour is a new folder there and one line in that call,
+//! which declares the module, gives the behaviour its slot in the radio and note envelopes
+//! ([`RadioMsg`], [`Note`]), makes its `kind` loadable from a config, and its metrics
+//! computable from the records.
 //!
 //! The envelopes are postcard-encoded enums, one variant per behaviour (the variant order is
 //! the line order), then the consensus layer's: the world checks that a frame decodes as a
@@ -9,15 +10,15 @@
 
 use std::marker::PhantomData;
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use serde_json::Value;
 use swarmrt_protocol::records::Records;
 use swarmrt_protocol::{Command, NoteJson, Observation, RecordedNote, Vocabulary};
 use swarmrt_scenario::{BehaviourSection, Config, ConfigError, KeyError};
 
 use crate::behaviour::{Act, Behaviour, Params};
-use crate::behaviours::{formation, goto};
-use crate::consensus::{ConsensusMsg, ConsensusNote, Decision};
+pub use crate::behaviours::{BEHAVIOURS, Note, RadioMsg};
+use crate::consensus::{ConsensusNote, Decision};
 use crate::inbox::Heard;
 
 /// Connects a behaviour to its variants of the envelopes (written by `registry!`).
@@ -61,7 +62,8 @@ pub trait Brain: Send {
     );
 }
 
-struct Entry<B>(PhantomData<fn() -> B>);
+/// A behaviour as a registry entry (its types erased behind [`Plugin`]).
+pub struct Entry<B>(pub PhantomData<fn() -> B>);
 
 fn parse<B: Behaviour>(params: &toml::Table) -> Result<B::Params, KeyError> {
     serde_path_to_error::deserialize::<_, B::Params>(toml::Value::Table(params.clone())).map_err(
@@ -273,32 +275,33 @@ pub const VOCABULARY: Vocabulary = Vocabulary {
 };
 
 /// Writes the envelopes, the [`Enveloped`] impls and the list from one line per behaviour.
-macro_rules! registry {
-    ($($variant:ident => $behaviour:ty),+ $(,)?) => {
+macro_rules! behaviours {
+    ($($variant:ident => $module:ident :: $ty:ident),+ $(,)?) => {
+        $(pub mod $module;)+
         /// A message in a radio frame: one variant per behaviour, then the consensus layer's.
-        #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+        #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
         pub enum RadioMsg {
             $(
-                #[doc = concat!("A message of `", stringify!($behaviour), "`.")]
-                $variant(<$behaviour as Behaviour>::Msg),
+                #[doc = concat!("A message of `", stringify!($module), "`.")]
+                $variant(<$module::$ty as $crate::behaviour::Behaviour>::Msg),
             )+
             /// Election, replicated log and leader choice ([`crate::consensus`]).
-            Consensus(ConsensusMsg),
+            Consensus($crate::consensus::ConsensusMsg),
         }
 
         /// A note a robot reports: one variant per behaviour, then the consensus layer's.
-        #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+        #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
         pub enum Note {
             $(
-                #[doc = concat!("A note of `", stringify!($behaviour), "`.")]
-                $variant(<$behaviour as Behaviour>::Note),
+                #[doc = concat!("A note of `", stringify!($module), "`.")]
+                $variant(<$module::$ty as $crate::behaviour::Behaviour>::Note),
             )+
             /// Consensus state changes and log events.
-            Consensus(ConsensusNote),
+            Consensus($crate::consensus::ConsensusNote),
         }
 
         impl Note {
-            fn behaviour_json(&self) -> serde_json::Result<String> {
+            pub(crate) fn behaviour_json(&self) -> serde_json::Result<String> {
                 match self {
                     $(Note::$variant(n) => serde_json::to_string(n),)+
                     Note::Consensus(c) => serde_json::to_string(c),
@@ -307,7 +310,7 @@ macro_rules! registry {
         }
 
         $(
-            impl Enveloped for $behaviour {
+            impl $crate::registry::Enveloped for $module::$ty {
                 fn wrap_msg(msg: Self::Msg) -> RadioMsg {
                     RadioMsg::$variant(msg)
                 }
@@ -324,12 +327,8 @@ macro_rules! registry {
         )+
 
         /// Every behaviour, in registry order.
-        pub static BEHAVIOURS: &[&dyn Plugin] = &[$(&Entry::<$behaviour>(PhantomData)),+];
+        pub static BEHAVIOURS: &[&dyn $crate::registry::Plugin] =
+            &[$(&$crate::registry::Entry::<$module::$ty>(std::marker::PhantomData)),+];
     };
 }
-
-// The list. Keep `Goto` first and `Formation` second: their envelope variants are 0 and 1.
-registry! {
-    Goto => goto::Goto,
-    Formation => formation::Formation,
-}
+pub(crate) use behaviours;

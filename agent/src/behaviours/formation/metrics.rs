@@ -7,9 +7,9 @@ use swarmrt_scenario::Config;
 use super::offsets;
 
 /// A loop: the virtual leader comes back within this distance of where it was (metres) ...
-const LOOP_RADIUS: f64 = 1.0;
+pub const LOOP_RADIUS: f64 = 1.0;
 /// ... after travelling at least this many times that distance in between.
-const LOOP_PATH: f64 = 4.0;
+pub const LOOP_PATH: f64 = 4.0;
 
 /// The metrics [`metrics`] computes.
 pub const NAMES: [&str; 4] = [
