@@ -27,9 +27,9 @@ use super::{
     BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_rate, machine, make_out_dir,
     progress, write_json,
 };
-use crate::commands::bench::SwarmArgs;
-use crate::error::{SwarmError, SwarmResult};
-use crate::{processes, run_dir};
+use crate::cli::SwarmArgs;
+use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
+use swarmrt_orchestrator::{processes, run_dir};
 
 /// Longest an in-process measurement steps, whatever `--in-process-ticks` says.
 const IN_PROCESS_BUDGET: Duration = Duration::from_secs(20);
@@ -166,7 +166,7 @@ pub fn scenario(base: &Path, n: u32, ticks: u64) -> SwarmResult<Config> {
         format!("map.goal.x={goal:.1}"),
         format!("map.goal.y={goal:.1}"),
     ];
-    crate::commands::run::load_config(base, &set)
+    swarmrt_orchestrator::commands::run::load_config(base, &set)
 }
 
 fn validate(args: &SwarmArgs) -> SwarmResult<()> {

@@ -20,8 +20,8 @@ use super::{
     BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_ns, fmt_rate, machine,
     make_out_dir, progress, write_json,
 };
-use crate::commands::bench::IpcArgs;
-use crate::error::{SwarmError, SwarmResult};
+use crate::cli::IpcArgs;
+use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
 
 /// The transport every row is compared with: iceoryx2 sleeping in a listener, as the
 /// runtime's shells do.

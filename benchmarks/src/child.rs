@@ -1,4 +1,4 @@
-//! The hidden `swarm bench child --spec <json>` subcommand: one process of a benchmark.
+//! The hidden `swarm-bench child --spec <json>` subcommand: one process of a benchmark.
 //!
 //! A child writes JSON lines on stdout ([`ChildMsg`]): `ready` once its ports exist (and the
 //! parent may start its peer), `progress` mid-measurement, `result` at the end. Errors go to
@@ -10,8 +10,9 @@ use std::io::Write;
 
 use serde::{Deserialize, Serialize};
 
-use crate::commands::bench::ChildArgs;
-use crate::error::{SwarmError, SwarmResult};
+use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
+
+use crate::cli::ChildArgs;
 
 /// Which transport a ping/pong pair uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
