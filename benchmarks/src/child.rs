@@ -12,8 +12,6 @@ use serde::{Deserialize, Serialize};
 
 use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
 
-use crate::cli::ChildArgs;
-
 /// Which transport a ping/pong pair uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -238,10 +236,10 @@ fn run_of(run_id: &str) -> SwarmResult<swarmrt_protocol::services::RunServices> 
     Ok(swarmrt_protocol::services::RunServices::new(run_id))
 }
 
-/// Runs the child described by `args.spec`.
-pub fn main(args: &ChildArgs) -> SwarmResult<()> {
-    let spec: ChildSpec = serde_json::from_str(&args.spec)
-        .map_err(|e| SwarmError::User(format!("bad --spec: {e}")))?;
+/// Runs the child described by `spec`, a [`ChildSpec`] as JSON (its `--spec`).
+pub fn main(spec: &str) -> SwarmResult<()> {
+    let spec: ChildSpec =
+        serde_json::from_str(spec).map_err(|e| SwarmError::User(format!("bad --spec: {e}")))?;
     let r = match &spec {
         ChildSpec::Pong {
             run_id,

@@ -5,6 +5,9 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 
+use crate::ipc::IpcOptions;
+use crate::swarm::SwarmOptions;
+
 /// Measure the IPC and the lock-step swarm against their alternatives.
 #[derive(Parser, Debug)]
 #[command(name = "swarm-bench", version)]
@@ -74,6 +77,32 @@ pub struct SwarmArgs {
     /// Write results.json, the runs and the plots here instead of bench/swarm-<time>/.
     #[arg(long)]
     pub out: Option<PathBuf>,
+}
+
+impl From<&IpcArgs> for IpcOptions {
+    fn from(a: &IpcArgs) -> IpcOptions {
+        IpcOptions {
+            payload: a.payload.clone(),
+            secs: a.secs,
+            fanout: a.fanout.clone(),
+            json: a.json,
+            out: a.out.clone(),
+        }
+    }
+}
+
+impl From<&SwarmArgs> for SwarmOptions {
+    fn from(a: &SwarmArgs) -> SwarmOptions {
+        SwarmOptions {
+            agents: a.agents.clone(),
+            ticks: a.ticks,
+            in_process_agents: a.in_process_agents.clone(),
+            in_process_ticks: a.in_process_ticks,
+            config: a.config.clone(),
+            json: a.json,
+            out: a.out.clone(),
+        }
+    }
 }
 
 /// The hidden child subcommand: what this process is to do, as JSON.

@@ -12,7 +12,7 @@ fn main() -> std::process::ExitCode {
     if let BenchCmd::Child(args) = &cli.command {
         // Benchmark children keep the default SIGTERM/SIGINT actions (no Ctrl-C handler), so
         // a parent-death signal ends them at once.
-        return match child::main(args) {
+        return match child::main(&args.spec) {
             Ok(()) => std::process::ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: bench child: {e}");
@@ -27,9 +27,9 @@ fn main() -> std::process::ExitCode {
         tracing::warn!("cannot install the Ctrl-C handler: {e}");
     }
     let result = interruptible(rx, |interrupt| match &cli.command {
-        BenchCmd::Ipc(args) => ipc::run(args, interrupt),
-        BenchCmd::Swarm(args) => swarm::run(args, interrupt),
-        BenchCmd::Child(args) => child::main(args),
+        BenchCmd::Ipc(args) => ipc::run(&args.into(), interrupt),
+        BenchCmd::Swarm(args) => swarm::run(&args.into(), interrupt),
+        BenchCmd::Child(args) => child::main(&args.spec),
     });
     exit(result)
 }

@@ -9,7 +9,7 @@
 //! ticking while it is read (a few ticks pay for it); the floor's world waits between two
 //! ticks (outside its timing).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
@@ -27,7 +27,6 @@ use super::{
     BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_rate, machine, make_out_dir,
     progress, write_json,
 };
-use crate::cli::SwarmArgs;
 use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
 use swarmrt_orchestrator::{processes, run_dir};
 
@@ -36,6 +35,25 @@ const IN_PROCESS_BUDGET: Duration = Duration::from_secs(20);
 /// Most robot processes this command starts (each costs ~1.4 MB PSS and a few descriptors
 /// in the world; see docs/benchmarks.md for where it stops).
 pub const MAX_PROCESS_AGENTS: u32 = 5_000;
+
+/// What `swarm bench swarm` measures (its command-line options, without clap).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SwarmOptions {
+    /// Robot process counts to run, each in 1..=[`MAX_PROCESS_AGENTS`] (`--agents`).
+    pub agents: Vec<u32>,
+    /// Lock-step ticks per run, the runtime and the floor alike (`--ticks`).
+    pub ticks: u64,
+    /// Robot counts for the in-process measurement (`--in-process-agents`).
+    pub in_process_agents: Vec<u32>,
+    /// Ticks per in-process measurement; it also stops after 20 s (`--in-process-ticks`).
+    pub in_process_ticks: u64,
+    /// The scenario the runtime runs; robots.count and the map are set per N (`--config`).
+    pub config: PathBuf,
+    /// Print the results as JSON instead of tables (`--json`).
+    pub json: bool,
+    /// Output directory; `None` is `bench/swarm-<time>/` (`--out`).
+    pub out: Option<PathBuf>,
+}
 
 /// The runtime at one N.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
@@ -169,7 +187,7 @@ pub fn scenario(base: &Path, n: u32, ticks: u64) -> SwarmResult<Config> {
     swarmrt_orchestrator::commands::run::load_config(base, &set)
 }
 
-fn validate(args: &SwarmArgs) -> SwarmResult<()> {
+fn validate(args: &SwarmOptions) -> SwarmResult<()> {
     let user = |m: String| Err(SwarmError::User(m));
     if args
         .agents
@@ -205,7 +223,7 @@ fn validate(args: &SwarmArgs) -> SwarmResult<()> {
 }
 
 /// `swarm bench swarm`.
-pub fn run(args: &SwarmArgs, interrupt: &Interrupt) -> SwarmResult<()> {
+pub fn run(args: &SwarmOptions, interrupt: &Interrupt) -> SwarmResult<()> {
     validate(args)?;
     // Resolve every scenario first: a bad config or an impossible layout is a user error
     // before anything starts.
