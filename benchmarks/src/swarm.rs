@@ -16,7 +16,7 @@ use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use swarmrt_agent::Agent;
 use swarmrt_protocol::Observation;
-use swarmrt_protocol::config::Config;
+use swarmrt_protocol::config::{Config, ConfigError};
 use swarmrt_world::World;
 
 use super::child::{ChildMsg, ChildSpec};
@@ -184,7 +184,21 @@ pub fn scenario(base: &Path, n: u32, ticks: u64) -> SwarmResult<Config> {
         format!("map.goal.x={goal:.1}"),
         format!("map.goal.y={goal:.1}"),
     ];
-    swarmrt_orchestrator::commands::run::load_config(base, &set)
+    load_config(base, &set)
+}
+
+/// Loads and validates a config with `set` applied, and builds its map once so a bad
+/// obstacle is a user error before any process starts (what `swarm run` does; the two are to
+/// share one function in a common crate).
+fn load_config(path: &Path, set: &[String]) -> SwarmResult<Config> {
+    let cfg = Config::load(path, set)?;
+    // Through ConfigError, so the line looks (and is escaped) like every other config error.
+    World::new(&cfg).map_err(|e| ConfigError {
+        file: path.display().to_string(),
+        key: e.key,
+        message: e.message,
+    })?;
+    Ok(cfg)
 }
 
 fn validate(args: &SwarmOptions) -> SwarmResult<()> {
