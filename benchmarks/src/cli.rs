@@ -112,3 +112,42 @@ pub struct ChildArgs {
     #[arg(long)]
     pub spec: String,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn command_line_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn options_carry_the_arguments_and_defaults() {
+        let cli =
+            Cli::try_parse_from(["swarm-bench", "ipc", "--payload", "64,128", "--json"]).unwrap();
+        let BenchCmd::Ipc(args) = &cli.command else {
+            panic!("{cli:?}");
+        };
+        let o = IpcOptions::from(args);
+        assert_eq!(o.payload, vec![64, 128]);
+        assert_eq!(o.secs, 1.0);
+        assert_eq!(o.fanout, vec![1, 10, 100, 500]);
+        assert!(o.json);
+        assert_eq!(o.out, None);
+
+        let cli =
+            Cli::try_parse_from(["swarm-bench", "swarm", "--agents", "3", "--out", "x"]).unwrap();
+        let BenchCmd::Swarm(args) = &cli.command else {
+            panic!("{cli:?}");
+        };
+        let o = SwarmOptions::from(args);
+        assert_eq!(o.agents, vec![3]);
+        assert_eq!(o.ticks, 300);
+        assert_eq!(o.in_process_agents, vec![100, 1000, 10000]);
+        assert_eq!(o.in_process_ticks, 100);
+        assert_eq!(o.config, PathBuf::from("configs/goto_simple.toml"));
+        assert_eq!(o.out, Some(PathBuf::from("x")));
+    }
+}

@@ -45,3 +45,31 @@ pub fn bench(args: &BenchArgs) -> SwarmResult<()> {
         exe.display()
     )))
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::cli::{Cli, Cmd};
+    use clap::Parser;
+
+    fn passed_on(argv: &[&str]) -> Vec<String> {
+        match Cli::try_parse_from(argv).unwrap().command {
+            Cmd::Bench(b) => b.args.iter().map(|a| a.to_string_lossy().into()).collect(),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn everything_after_bench_goes_to_swarm_bench_untouched() {
+        <Cli as clap::CommandFactory>::command().debug_assert();
+        assert_eq!(
+            passed_on(&["swarm", "bench", "ipc", "--secs", "0.2", "--json"]),
+            ["ipc", "--secs", "0.2", "--json"]
+        );
+        assert_eq!(passed_on(&["swarm", "bench", "--help"]), ["--help"]);
+        assert_eq!(
+            passed_on(&["swarm", "bench", "swarm", "-h"]),
+            ["swarm", "-h"]
+        );
+        assert!(passed_on(&["swarm", "bench"]).is_empty());
+    }
+}
