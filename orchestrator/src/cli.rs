@@ -23,9 +23,9 @@ pub enum Cmd {
     Clean,
     /// Run a scenario over the cross product of varied keys and seeds; write sweep.csv and plots.
     Sweep(crate::commands::sweep::SweepArgs),
-    /// Measure the IPC and the lock-step swarm against their alternatives.
-    #[command(subcommand)]
-    Bench(crate::commands::bench::BenchCmd),
+    /// Measure the IPC and the lock-step swarm against their alternatives (runs `swarm-bench`).
+    #[command(disable_help_flag = true)]
+    Bench(crate::commands::bench::BenchArgs),
     /// Seeded fault fuzzing of the consensus cores.
     #[command(subcommand)]
     Fuzz(crate::commands::fuzz::FuzzCmd),

@@ -2,7 +2,6 @@
 //! writes run directories. Also runs the same cores in-process.
 #![warn(missing_docs)]
 
-pub mod bench;
 pub mod cleanup;
 pub mod cli;
 pub mod commands;

@@ -8,9 +8,10 @@ use swarmrt_orchestrator::error::SwarmError;
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     swarmrt_scenario::process::init_logging();
-    if let Cmd::Bench(commands::bench::BenchCmd::Child(args)) = &cli.command {
-        // Benchmark children keep the default SIGTERM/SIGINT actions (no Ctrl-C handler).
-        return commands::bench::child(args);
+    if let Cmd::Bench(args) = &cli.command {
+        // This process becomes `swarm-bench`, which installs its own Ctrl-C handler: none
+        // here. Returns only if it could not be started.
+        return exit(commands::bench::bench(args));
     }
     let (tx, rx) = crossbeam_channel::unbounded::<()>();
     if let Err(e) = ctrlc::set_handler(move || {
@@ -23,9 +24,15 @@ fn main() -> std::process::ExitCode {
         Cmd::Check(args) => commands::check::check(args),
         Cmd::Clean => commands::clean::clean(),
         Cmd::Sweep(args) => commands::sweep::sweep(args, rx),
-        Cmd::Bench(cmd) => commands::bench::bench(cmd, rx),
+        // Dispatched above, before the handler exists; here only to keep the match whole.
+        Cmd::Bench(args) => commands::bench::bench(args),
         Cmd::Fuzz(cmd) => commands::fuzz::fuzz(cmd),
     };
+    exit(result)
+}
+
+/// Prints a failure and turns it into the exit code DESIGN section 6 promises.
+fn exit(result: Result<(), SwarmError>) -> std::process::ExitCode {
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {

@@ -258,13 +258,28 @@ pub struct RobotPorts {
 impl RobotPorts {
     /// Opens the run's services from `node` and creates a robot's ports on them.
     pub fn open(node: &Node<Svc>, run: &RunServices) -> Result<RobotPorts, IpcError> {
-        let services = open_services(node, run)?;
+        let s = open_services(node, run)?;
+        RobotPorts::on(
+            &s.observations,
+            &s.observations_event,
+            &s.commands,
+            &s.commands_event,
+        )
+    }
+
+    /// A robot's ports on the four services (opened, or created by a benchmark that plays
+    /// the robot).
+    pub fn on(
+        observations: &ObservationService,
+        observations_event: &EventService,
+        commands: &CommandService,
+        commands_event: &EventService,
+    ) -> Result<RobotPorts, IpcError> {
         Ok(RobotPorts {
-            subscriber: services.observations.subscriber_builder().create()?,
-            listener: services.observations_event.listener_builder().create()?,
-            publisher: services.commands.publisher_builder().create()?,
-            notifier: services
-                .commands_event
+            subscriber: observations.subscriber_builder().create()?,
+            listener: observations_event.listener_builder().create()?,
+            publisher: commands.publisher_builder().create()?,
+            notifier: commands_event
                 .notifier_builder()
                 .default_event_id(EventId::new(crate::services::EVENT_COMMAND))
                 .create()?,

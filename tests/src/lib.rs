@@ -1,4 +1,4 @@
-//! Support for the end-to-end tests in `tests/tests/`: builds the three binaries once, runs
+//! Support for the end-to-end tests in `tests/tests/`: builds the four binaries once, runs
 //! `swarm` with a watchdog, and reads run directories.
 #![warn(missing_docs)]
 
@@ -15,9 +15,9 @@ pub fn workspace() -> PathBuf {
         .to_path_buf()
 }
 
-/// Directory holding `swarm`, `swarm-world` and `swarm-agent`, built once per test process
-/// with the same profile as the tests (cargo only builds a package's own binaries for its
-/// tests, and these live in three packages).
+/// Directory holding `swarm`, `swarm-world`, `swarm-agent` and `swarm-bench`, built once per
+/// test process with the same profile as the tests (cargo only builds a package's own
+/// binaries for its tests, and these live in other packages).
 pub fn bin_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
@@ -36,6 +36,8 @@ pub fn bin_dir() -> &'static Path {
             "swarmrt-world",
             "-p",
             "swarmrt-agent",
+            "-p",
+            "swarmrt-benchmarks",
             "--bins",
         ]);
         if release {

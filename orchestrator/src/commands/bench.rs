@@ -1,107 +1,75 @@
-//! `swarm bench`: IPC and lock-step swarm benchmarks (the work lives in `crate::bench`).
+//! `swarm bench`: the benchmarks live in their own package and binary, `swarm-bench`
+//! (`benchmarks/`); this verb only runs it.
 
-use std::path::PathBuf;
+use std::ffi::OsString;
+use std::os::unix::process::CommandExt;
+use std::process::Command;
 
-use clap::{Args, Subcommand};
+use anyhow::anyhow;
+use clap::Args;
 
-use crate::bench;
 use crate::error::{SwarmError, SwarmResult};
+use crate::processes;
 
-/// `swarm bench <what>`.
-#[derive(Subcommand, Debug, Clone)]
-pub enum BenchCmd {
-    /// iceoryx2 against Unix sockets, TCP and a crossbeam channel; fan-out; loss accounting.
-    Ipc(IpcArgs),
-    /// Lock-step ticks/s against robot process count, against a bare iceoryx2 floor.
-    Swarm(SwarmArgs),
-    /// One process of a benchmark (started by `swarm bench`, not by hand).
-    #[command(hide = true)]
-    Child(ChildArgs),
-}
+/// The benchmark binary, built beside `swarm` (`cargo build` builds both).
+pub const BENCH_BIN: &str = "swarm-bench";
 
-/// `swarm bench ipc`.
+/// `swarm bench <what> [args]`: everything after `bench` goes to `swarm-bench` untouched,
+/// `--help` included, so `swarm bench --help` lists what `swarm-bench` measures.
 #[derive(Args, Debug, Clone)]
-pub struct IpcArgs {
-    /// Payload sizes in bytes (each at least 64).
+pub struct BenchArgs {
+    /// `ipc` or `swarm` and their options (see `swarm bench --help`).
     #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "64,1024,4096,65536,1048576"
+        trailing_var_arg = true,
+        allow_hyphen_values = true,
+        value_name = "ARGS"
     )]
-    pub payload: Vec<usize>,
-    /// Seconds of measurement per transport and payload (half round trips, half throughput).
-    #[arg(long, default_value_t = 1.0)]
-    pub secs: f64,
-    /// Subscriber process counts for the fan-out measurement.
-    #[arg(long, value_delimiter = ',', default_value = "1,10,100,500")]
-    pub fanout: Vec<usize>,
-    /// Print the results as one JSON document instead of tables.
-    #[arg(long)]
-    pub json: bool,
-    /// Write results.json and the plots here instead of bench/ipc-<time>/.
-    #[arg(long)]
-    pub out: Option<PathBuf>,
+    pub args: Vec<OsString>,
 }
 
-/// `swarm bench swarm`.
-#[derive(Args, Debug, Clone)]
-pub struct SwarmArgs {
-    /// Robot process counts to run.
-    #[arg(long, value_delimiter = ',', default_value = "10,50,100,200,500")]
-    pub agents: Vec<u32>,
-    /// Lock-step ticks per run (the runtime and the floor alike).
-    #[arg(long, default_value_t = 300)]
-    pub ticks: u64,
-    /// Robot counts for the in-process measurement (same cores, no IPC).
-    #[arg(long, value_delimiter = ',', default_value = "100,1000,10000")]
-    pub in_process_agents: Vec<u32>,
-    /// Ticks per in-process measurement (it also stops after 20 s).
-    #[arg(long, default_value_t = 100)]
-    pub in_process_ticks: u64,
-    /// The scenario the runtime runs (robots.count and the map are set per N).
-    #[arg(long, default_value = "configs/goto_simple.toml")]
-    pub config: PathBuf,
-    /// Print the results as one JSON document instead of tables.
-    #[arg(long)]
-    pub json: bool,
-    /// Write results.json, the runs and the plots here instead of bench/swarm-<time>/.
-    #[arg(long)]
-    pub out: Option<PathBuf>,
+/// Replaces this process with `swarm-bench <args>` (`exec`), found beside `swarm` like
+/// `swarm-world` and `swarm-agent`. The benchmark keeps this process's pid, terminal and
+/// process group, so Ctrl-C reaches it exactly as it reached `swarm bench` before, its
+/// children are this pid's children, and its exit code (0, 1, 2, 130) is `swarm`'s, with
+/// nothing to forward. Call it before installing a Ctrl-C handler. Returns only if
+/// `swarm-bench` cannot be started.
+pub fn bench(args: &BenchArgs) -> SwarmResult<()> {
+    let exe = processes::sibling_binary(BENCH_BIN)?;
+    // argv[0] names the command as the user typed it, so its usage lines read `swarm bench`.
+    let err = Command::new(&exe)
+        .arg0("swarm bench")
+        .args(&args.args)
+        .exec();
+    Err(SwarmError::Internal(anyhow!(
+        "cannot start {}: {err}",
+        exe.display()
+    )))
 }
 
-/// The hidden child subcommand: what this process is to do, as JSON.
-#[derive(Args, Debug, Clone)]
-pub struct ChildArgs {
-    /// A `bench::child::ChildSpec` as JSON.
-    #[arg(long)]
-    pub spec: String,
-}
+#[cfg(test)]
+mod tests {
+    use crate::cli::{Cli, Cmd};
+    use clap::Parser;
 
-/// Runs a benchmark; `interrupt` fires on Ctrl-C, which stops it with exit code 130 after
-/// every child is reaped and every iceoryx2 resource removed (no results are written).
-pub fn bench(cmd: &BenchCmd, interrupt: crossbeam_channel::Receiver<()>) -> SwarmResult<()> {
-    let interrupt = bench::Interrupt::new(interrupt);
-    let r = match cmd {
-        BenchCmd::Ipc(args) => bench::ipc::run(args, &interrupt),
-        BenchCmd::Swarm(args) => bench::swarm::run(args, &interrupt),
-        BenchCmd::Child(args) => bench::child::main(args),
-    };
-    match r {
-        Err(SwarmError::Internal(_)) if interrupt.fired() => Err(SwarmError::Interrupted(
-            "interrupted before the results were written".into(),
-        )),
-        r => r,
-    }
-}
-
-/// Entry point of a benchmark child process (no Ctrl-C handler: SIGTERM and SIGINT keep
-/// their default action, so a parent-death signal ends the child at once).
-pub fn child(args: &ChildArgs) -> std::process::ExitCode {
-    match bench::child::main(args) {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: bench child: {e}");
-            std::process::ExitCode::from(e.exit_code())
+    fn passed_on(argv: &[&str]) -> Vec<String> {
+        match Cli::try_parse_from(argv).unwrap().command {
+            Cmd::Bench(b) => b.args.iter().map(|a| a.to_string_lossy().into()).collect(),
+            other => panic!("{other:?}"),
         }
+    }
+
+    #[test]
+    fn everything_after_bench_goes_to_swarm_bench_untouched() {
+        <Cli as clap::CommandFactory>::command().debug_assert();
+        assert_eq!(
+            passed_on(&["swarm", "bench", "ipc", "--secs", "0.2", "--json"]),
+            ["ipc", "--secs", "0.2", "--json"]
+        );
+        assert_eq!(passed_on(&["swarm", "bench", "--help"]), ["--help"]);
+        assert_eq!(
+            passed_on(&["swarm", "bench", "swarm", "-h"]),
+            ["swarm", "-h"]
+        );
+        assert!(passed_on(&["swarm", "bench"]).is_empty());
     }
 }

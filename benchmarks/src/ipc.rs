@@ -3,7 +3,7 @@
 //! iceoryx2. Writes `results.json`, `ipc.svg` and `ipc.png` into the output directory and
 //! prints a table (or the JSON with `--json`).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
@@ -20,8 +20,7 @@ use super::{
     BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_ns, fmt_rate, machine,
     make_out_dir, progress, write_json,
 };
-use crate::commands::bench::IpcArgs;
-use crate::error::{SwarmError, SwarmResult};
+use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
 
 /// The transport every row is compared with: iceoryx2 sleeping in a listener, as the
 /// runtime's shells do.
@@ -139,12 +138,27 @@ pub struct IpcReport {
     pub wall_secs: f64,
 }
 
+/// What `swarm bench ipc` measures (its command-line options, without clap).
+#[derive(Debug, Clone, PartialEq)]
+pub struct IpcOptions {
+    /// Payload sizes in bytes, each at least [`MIN_PAYLOAD`] (`--payload`).
+    pub payload: Vec<usize>,
+    /// Seconds of measurement per transport and payload (`--secs`).
+    pub secs: f64,
+    /// Subscriber process counts for the fan-out measurement (`--fanout`).
+    pub fanout: Vec<usize>,
+    /// Print the results as JSON instead of tables (`--json`).
+    pub json: bool,
+    /// Output directory; `None` is `bench/ipc-<time>/` (`--out`).
+    pub out: Option<PathBuf>,
+}
+
 fn user(msg: String) -> SwarmError {
     SwarmError::User(msg)
 }
 
 /// `swarm bench ipc`.
-pub fn run(args: &IpcArgs, interrupt: &Interrupt) -> SwarmResult<()> {
+pub fn run(args: &IpcOptions, interrupt: &Interrupt) -> SwarmResult<()> {
     if args.payload.is_empty() || args.payload.iter().any(|&p| p < MIN_PAYLOAD) {
         return Err(user(format!(
             "--payload: expected sizes of at least {MIN_PAYLOAD} bytes, got {:?}",

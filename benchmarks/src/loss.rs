@@ -20,13 +20,13 @@ use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use serde::{Deserialize, Serialize};
 use swarmrt_protocol::ipc as proto_ipc;
-use swarmrt_protocol::services::{EVENT_COMMAND, RunServices};
+use swarmrt_protocol::services::RunServices;
 use swarmrt_protocol::{Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION};
 
 use super::child::{ChildMsg, LossMode, say};
 use super::transports::{idle_wait, wait_for};
 use super::{PEER_TIMEOUT, Svc, bench_node, iox, service_name, spin_for};
-use super::{WorldPorts, world_ports};
+use super::{RobotPorts, WorldPorts, world_ports};
 
 /// Side-event id: the subscriber has called `receive()` since the publisher appeared.
 const CONNECTED: usize = 1;
@@ -175,16 +175,18 @@ pub fn subscriber(run: &RunServices, mode: LossMode, work_us: u64) -> anyhow::Re
         LossMode::RuntimeFree | LossMode::RuntimeLockStep => {
             let s =
                 proto_ipc::create_services(&node, run, 1, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
-            let sub = iox(s.observations.subscriber_builder().create(), "subscriber")?;
-            let listener = iox(s.observations_event.listener_builder().create(), "listener")?;
-            let publisher = iox(s.commands.publisher_builder().create(), "publisher")?;
-            let notifier = iox(
-                s.commands_event
-                    .notifier_builder()
-                    .default_event_id(EventId::new(EVENT_COMMAND))
-                    .create(),
-                "notifier",
-            )?;
+            let RobotPorts {
+                subscriber: sub,
+                listener,
+                publisher,
+                notifier,
+            } = RobotPorts::on(
+                &s.observations,
+                &s.observations_event,
+                &s.commands,
+                &s.commands_event,
+            )
+            .map_err(|e| anyhow::anyhow!("robot ports: {e}"))?;
             say(&ChildMsg::Ready { addr: None })?;
             'run: loop {
                 while let Some(sample) = iox(sub.receive(), "receive")? {

@@ -23,13 +23,13 @@ use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use serde::{Deserialize, Serialize};
 use swarmrt_protocol::ipc as proto_ipc;
-use swarmrt_protocol::services::{EVENT_COMMAND, RunServices};
+use swarmrt_protocol::services::RunServices;
 use swarmrt_protocol::{Command, Observation, ObservationHeader, PROTOCOL_VERSION};
 
 use super::child::{ChildMsg, Transport, say};
 use super::stats::{Summary, summarize};
 use super::{PEER_TIMEOUT, Svc, bench_node, iox, service_name};
-use super::{WorldPorts, world_ports};
+use super::{WorldPorts, robot_ports, world_ports};
 
 /// Bytes of the message header (kind u32, pad, seq u64, value u64).
 pub const HEADER: usize = 24;
@@ -716,24 +716,10 @@ pub fn path_world(run: &RunServices, runtime: bool, secs: f64) -> anyhow::Result
 pub fn path_robot(run: &RunServices, runtime: bool) -> anyhow::Result<()> {
     let node = bench_node(run, "bench-path-robot")?;
     if runtime {
-        let s = proto_ipc::open_services(&node, run).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let subscriber = iox(s.observations.subscriber_builder().create(), "subscriber")?;
-        let listener = iox(s.observations_event.listener_builder().create(), "listener")?;
-        let publisher = iox(s.commands.publisher_builder().create(), "publisher")?;
-        let notifier = iox(
-            s.commands_event
-                .notifier_builder()
-                .default_event_id(EventId::new(EVENT_COMMAND))
-                .create(),
-            "notifier",
-        )?;
-        iox(
-            publisher.send_copy(Command::hello(0, std::process::id())),
-            "send",
-        )?;
-        iox(notifier.notify(), "notify")?;
+        let ports = robot_ports(&node, run)?;
+        iox(ports.hello(0), "send")?;
         loop {
-            while let Some(sample) = iox(subscriber.receive(), "receive")? {
+            while let Some(sample) = iox(ports.subscriber.receive(), "receive")? {
                 let header = *sample.user_header();
                 if header.shutdown != 0 {
                     return Ok(());
@@ -741,13 +727,9 @@ pub fn path_robot(run: &RunServices, runtime: bool) -> anyhow::Result<()> {
                 // Read the own slot, as a robot does.
                 let robot = sample.payload().first().map(|o| o.robot).unwrap_or(0);
                 drop(sample);
-                iox(
-                    publisher.send_copy(Command::act(robot, header.tick)),
-                    "send",
-                )?;
-                iox(notifier.notify(), "notify")?;
+                iox(ports.send(Command::act(robot, header.tick)), "send")?;
             }
-            idle_wait(&listener)?;
+            idle_wait(&ports.listener)?;
         }
     } else {
         let (publisher, subscriber, notifier, listener) = raw_path_ports(&node, run, false)?;

@@ -1,4 +1,4 @@
-//! Benchmark child processes: spawn (this binary, `bench child --spec`), read their one-line
+//! Benchmark child processes: spawn (this binary, `child --spec`), read their one-line
 //! JSON messages, reap them. Dropping a [`Children`] kills and reaps whatever is left, so no
 //! error path leaves a process behind.
 
@@ -105,7 +105,7 @@ impl Children {
         self.kids.iter().map(|(_, c)| c.id()).collect()
     }
 
-    /// Starts `swarm bench child --spec <spec>`; with `report`, its stdout is read as
+    /// Starts `swarm-bench child --spec <spec>`; with `report`, its stdout is read as
     /// messages, otherwise discarded.
     pub fn spawn(
         &mut self,
@@ -113,10 +113,10 @@ impl Children {
         spec: &ChildSpec,
         report: bool,
     ) -> anyhow::Result<Option<Messages>> {
-        let exe = std::env::current_exe().context("cannot locate the swarm executable")?;
+        let exe = std::env::current_exe().context("cannot locate the swarm-bench executable")?;
         let json = serde_json::to_string(spec)?;
-        let mut cmd = crate::processes::child_command(&exe);
-        cmd.args(["bench", "child", "--spec", &json])
+        let mut cmd = swarmrt_orchestrator::processes::child_command(&exe);
+        cmd.args(["child", "--spec", &json])
             .stdin(if report {
                 Stdio::piped()
             } else {

@@ -8,10 +8,9 @@
 use std::time::{Duration, Instant};
 
 use anyhow::bail;
-use iceoryx2::prelude::*;
 use serde::{Deserialize, Serialize};
 use swarmrt_protocol::ipc as proto_ipc;
-use swarmrt_protocol::services::{EVENT_COMMAND, RunServices};
+use swarmrt_protocol::services::RunServices;
 use swarmrt_protocol::{Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION};
 
 use super::child::{ChildMsg, say};
@@ -19,7 +18,7 @@ use super::fanout::own_fds;
 use super::stats::{Summary, summarize};
 use super::transports::idle_wait;
 use super::{PEER_TIMEOUT, bench_node, iox};
-use super::{WorldPorts, world_ports};
+use super::{WorldPorts, robot_ports, world_ports};
 
 /// The tick after which memory is read: every observation sample has been written once.
 pub const SAMPLE_TICK: u64 = proto_ipc::OBSERVATION_SAMPLES as u64 + 1;
@@ -180,24 +179,10 @@ pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
 /// The floor robot child: hello, then answer every tick at once until shutdown.
 pub fn agent(run: &RunServices, id: u32) -> anyhow::Result<()> {
     let node = bench_node(run, &run.robot_node_name(id))?;
-    let s = proto_ipc::open_services(&node, run).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let subscriber = iox(s.observations.subscriber_builder().create(), "subscriber")?;
-    let listener = iox(s.observations_event.listener_builder().create(), "listener")?;
-    let publisher = iox(s.commands.publisher_builder().create(), "publisher")?;
-    let notifier = iox(
-        s.commands_event
-            .notifier_builder()
-            .default_event_id(EventId::new(EVENT_COMMAND))
-            .create(),
-        "notifier",
-    )?;
-    iox(
-        publisher.send_copy(Command::hello(id, std::process::id())),
-        "hello",
-    )?;
-    iox(notifier.notify(), "notify")?;
+    let ports = robot_ports(&node, run)?;
+    iox(ports.hello(id), "hello")?;
     loop {
-        while let Some(sample) = iox(subscriber.receive(), "receive")? {
+        while let Some(sample) = iox(ports.subscriber.receive(), "receive")? {
             let header = *sample.user_header();
             if header.shutdown != 0 {
                 return Ok(());
@@ -207,12 +192,8 @@ pub fn agent(run: &RunServices, id: u32) -> anyhow::Result<()> {
                 bail!("observation sample has no slot for robot {id}");
             };
             drop(sample);
-            iox(
-                publisher.send_copy(Command::act(robot, header.tick)),
-                "send",
-            )?;
-            iox(notifier.notify(), "notify")?;
+            iox(ports.send(Command::act(robot, header.tick)), "send")?;
         }
-        idle_wait(&listener)?;
+        idle_wait(&ports.listener)?;
     }
 }

@@ -1,17 +1,21 @@
-//! `swarm bench`: measurements of the IPC and of the lock-step swarm.
+//! `swarm-bench` (run as `swarm bench`): measurements of the IPC and of the lock-step swarm.
 //!
 //! Every measurement that crosses processes re-executes this binary with the hidden
-//! `swarm bench child --spec <json>` subcommand ([`child`]). The parent holds no iceoryx2
+//! `swarm-bench child --spec <json>` subcommand ([`child`]). The parent holds no iceoryx2
 //! node (so children never inherit its descriptors); it only spawns, reads one JSON line of
 //! results per child over a pipe, and reaps. Each measurement claims its own run id, so its
 //! iceoryx2 root (`/dev/shm/swarmrt-iceoryx2/<id>/`) and shared-memory prefix are its own, and
 //! removing them afterwards is exact; `swarm clean` finds them if the parent was killed.
 //!
+//! - [`cli`]: the command line; the only module that knows clap.
 //! - [`ipc`]: `swarm bench ipc` (transports, fan-out, loss accounting, the runtime's path).
 //! - [`swarm`]: `swarm bench swarm` (the real runtime, the bare floor, in-process).
 //! - [`transports`], [`fanout`], [`loss`], [`floor`]: what the child processes do.
+//! - [`procs`], [`stats`], [`plot`]: child processes, summaries, figures.
+#![warn(missing_docs)]
 
 pub mod child;
+pub mod cli;
 pub mod fanout;
 pub mod floor;
 pub mod ipc;
@@ -35,8 +39,8 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use swarmrt_protocol::ipc as proto_ipc;
 use swarmrt_protocol::services::RunServices;
 
-use crate::cleanup;
-use crate::error::SwarmError;
+use swarmrt_orchestrator::cleanup;
+use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
 
 /// Shortcut for the iceoryx2 service flavour.
 pub type Svc = proto_ipc::Svc;
@@ -99,6 +103,21 @@ impl Interrupt {
     }
 }
 
+/// Runs a benchmark; `interrupt` fires on Ctrl-C, which stops it with exit code 130 after
+/// every child is reaped and every iceoryx2 resource removed (no results are written).
+pub fn interruptible(
+    interrupt: Receiver<()>,
+    bench: impl FnOnce(&Interrupt) -> SwarmResult<()>,
+) -> SwarmResult<()> {
+    let interrupt = Interrupt::new(interrupt);
+    match bench(&interrupt) {
+        Err(SwarmError::Internal(_)) if interrupt.fired() => Err(SwarmError::Interrupted(
+            "interrupted before the results were written".into(),
+        )),
+        r => r,
+    }
+}
+
 /// The iceoryx2 names of one measurement: a claimed run id whose root and shared memory are
 /// removed when this is dropped, on every path out of the measurement.
 pub struct BenchRun {
@@ -108,7 +127,7 @@ pub struct BenchRun {
 impl BenchRun {
     /// Claims a fresh run id (see `cleanup::claim`).
     pub fn claim() -> anyhow::Result<BenchRun> {
-        let id = crate::processes::new_run_id();
+        let id = swarmrt_orchestrator::processes::new_run_id();
         cleanup::claim(&id).context("cannot create the benchmark's iceoryx2 directory")?;
         Ok(BenchRun {
             run: RunServices::new(&id),
@@ -161,24 +180,9 @@ pub fn iox<T, E: std::fmt::Debug>(r: Result<T, E>, what: &str) -> anyhow::Result
     r.map_err(|e| anyhow::anyhow!("{what}: {e:?}"))
 }
 
-/// The world side of the runtime's services, as the world shell opens it: the observation
-/// slice publisher (`slots` robots) and its event, the command subscriber and its event.
-pub struct WorldPorts {
-    /// Observation slices.
-    pub publisher: iceoryx2::port::publisher::Publisher<
-        Svc,
-        [swarmrt_protocol::Observation],
-        swarmrt_protocol::ObservationHeader,
-    >,
-    /// Wakes the robots.
-    pub notifier: iceoryx2::port::notifier::Notifier<Svc>,
-    /// Commands from every robot.
-    pub commands: iceoryx2::port::subscriber::Subscriber<Svc, swarmrt_protocol::Command, ()>,
-    /// Woken by the robots.
-    pub listener: iceoryx2::port::listener::Listener<Svc>,
-}
+pub use proto_ipc::{RobotPorts, WorldPorts};
 
-/// Opens [`WorldPorts`] on the four service handles (created or opened).
+/// [`WorldPorts::open`] with the benchmarks' error type.
 pub fn world_ports(
     observations: &proto_ipc::ObservationService,
     observations_event: &proto_ipc::EventService,
@@ -186,19 +190,22 @@ pub fn world_ports(
     commands_event: &proto_ipc::EventService,
     slots: usize,
 ) -> anyhow::Result<WorldPorts> {
-    Ok(WorldPorts {
-        publisher: iox(
-            observations
-                .publisher_builder()
-                .initial_max_slice_len(slots)
-                .override_sample_preallocation(|_| proto_ipc::OBSERVATION_SAMPLES)
-                .create(),
-            "publisher",
-        )?,
-        notifier: iox(observations_event.notifier_builder().create(), "notifier")?,
-        commands: iox(commands.subscriber_builder().create(), "subscriber")?,
-        listener: iox(commands_event.listener_builder().create(), "listener")?,
-    })
+    WorldPorts::open(
+        observations,
+        observations_event,
+        commands,
+        commands_event,
+        slots,
+    )
+    .map_err(|e| anyhow::anyhow!("world ports: {e}"))
+}
+
+/// [`RobotPorts::open`] with the benchmarks' error type.
+pub fn robot_ports(
+    node: &iceoryx2::node::Node<Svc>,
+    run: &swarmrt_protocol::services::RunServices,
+) -> anyhow::Result<RobotPorts> {
+    RobotPorts::open(node, run).map_err(|e| anyhow::anyhow!("robot ports: {e}"))
 }
 
 /// CLOCK_MONOTONIC in nanoseconds: the same clock in every process of this machine, so
@@ -230,7 +237,7 @@ pub fn default_out(kind: &str) -> PathBuf {
         .map(|d| d.as_secs())
         .unwrap_or(0);
     let (h, m, s) = ((secs / 3600) % 24, (secs / 60) % 60, secs % 60);
-    let (y, mo, d) = crate::run_dir::civil_from_days((secs / 86_400) as i64);
+    let (y, mo, d) = swarmrt_orchestrator::run_dir::civil_from_days((secs / 86_400) as i64);
     let base = format!("bench/{kind}-{y:04}{mo:02}{d:02}-{h:02}{m:02}{s:02}");
     let mut dir = PathBuf::from(&base);
     let mut k = 1;

@@ -1,7 +1,8 @@
 //! Benchmark figures: panels of log-log line charts, written as SVG and PNG with the embedded
-//! font of `crate::plot` (no system font library needed).
+//! font of the orchestrator's figures (no system font library needed).
 
 use std::path::Path;
+use std::sync::OnceLock;
 
 use anyhow::{Context, anyhow};
 use plotters::coord::Shift;
@@ -208,9 +209,27 @@ fn draw_figure<DB: DrawingBackend>(
     Ok(())
 }
 
+/// The orchestrator's embedded font (`orchestrator/assets/`), registered with plotters as
+/// "sans-serif" like `swarmrt_orchestrator::plot` does. That registration is crate-private
+/// there; once it is public (or moved to a shared crate), call it instead of this.
+static FONT_BYTES: &[u8] = include_bytes!("../../orchestrator/assets/DejaVuSans.ttf");
+
+/// Registers the embedded font once; later calls return the first outcome.
+fn ensure_font() -> anyhow::Result<()> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT_BYTES).is_ok()
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(anyhow!("the embedded plot font could not be loaded"))
+    }
+}
+
 /// Writes `<stem>.svg` and `<stem>.png` in `dir`: `panels` in a grid of up to two columns.
 pub fn write_figure(dir: &Path, stem: &str, title: &str, panels: &[Panel]) -> anyhow::Result<()> {
-    crate::plot::ensure_font()?;
+    ensure_font()?;
     let cols = panels.len().clamp(1, 2);
     let rows = panels.len().div_ceil(cols).max(1);
     let size = (PANEL_W * cols as u32, TITLE_H + PANEL_H * rows as u32);

@@ -1,4 +1,4 @@
-//! The hidden `swarm bench child --spec <json>` subcommand: one process of a benchmark.
+//! The hidden `swarm-bench child --spec <json>` subcommand: one process of a benchmark.
 //!
 //! A child writes JSON lines on stdout ([`ChildMsg`]): `ready` once its ports exist (and the
 //! parent may start its peer), `progress` mid-measurement, `result` at the end. Errors go to
@@ -10,8 +10,7 @@ use std::io::Write;
 
 use serde::{Deserialize, Serialize};
 
-use crate::commands::bench::ChildArgs;
-use crate::error::{SwarmError, SwarmResult};
+use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
 
 /// Which transport a ping/pong pair uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -237,10 +236,10 @@ fn run_of(run_id: &str) -> SwarmResult<swarmrt_protocol::services::RunServices> 
     Ok(swarmrt_protocol::services::RunServices::new(run_id))
 }
 
-/// Runs the child described by `args.spec`.
-pub fn main(args: &ChildArgs) -> SwarmResult<()> {
-    let spec: ChildSpec = serde_json::from_str(&args.spec)
-        .map_err(|e| SwarmError::User(format!("bad --spec: {e}")))?;
+/// Runs the child described by `spec`, a [`ChildSpec`] as JSON (its `--spec`).
+pub fn main(spec: &str) -> SwarmResult<()> {
+    let spec: ChildSpec =
+        serde_json::from_str(spec).map_err(|e| SwarmError::User(format!("bad --spec: {e}")))?;
     let r = match &spec {
         ChildSpec::Pong {
             run_id,

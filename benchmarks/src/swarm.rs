@@ -9,15 +9,13 @@
 //! ticking while it is read (a few ticks pay for it); the floor's world waits between two
 //! ticks (outside its timing).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
-use swarmrt_agent::Agent;
-use swarmrt_protocol::Observation;
+use swarmrt_harness::lockstep::Lockstep;
 use swarmrt_scenario::Config;
-use swarmrt_world::World;
 
 use super::child::{ChildMsg, ChildSpec};
 use super::floor::{FloorResult, SAMPLE_TICK};
@@ -27,15 +25,33 @@ use super::{
     BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_rate, machine, make_out_dir,
     progress, write_json,
 };
-use crate::commands::bench::SwarmArgs;
-use crate::error::{SwarmError, SwarmResult};
-use crate::{processes, run_dir};
+use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
+use swarmrt_orchestrator::{processes, run_dir};
 
 /// Longest an in-process measurement steps, whatever `--in-process-ticks` says.
 const IN_PROCESS_BUDGET: Duration = Duration::from_secs(20);
 /// Most robot processes this command starts (each costs ~1.4 MB PSS and a few descriptors
 /// in the world; see docs/benchmarks.md for where it stops).
 pub const MAX_PROCESS_AGENTS: u32 = 5_000;
+
+/// What `swarm bench swarm` measures (its command-line options, without clap).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SwarmOptions {
+    /// Robot process counts to run, each in 1..=[`MAX_PROCESS_AGENTS`] (`--agents`).
+    pub agents: Vec<u32>,
+    /// Lock-step ticks per run, the runtime and the floor alike (`--ticks`).
+    pub ticks: u64,
+    /// Robot counts for the in-process measurement (`--in-process-agents`).
+    pub in_process_agents: Vec<u32>,
+    /// Ticks per in-process measurement; it also stops after 20 s (`--in-process-ticks`).
+    pub in_process_ticks: u64,
+    /// The scenario the runtime runs; robots.count and the map are set per N (`--config`).
+    pub config: PathBuf,
+    /// Print the results as JSON instead of tables (`--json`).
+    pub json: bool,
+    /// Output directory; `None` is `bench/swarm-<time>/` (`--out`).
+    pub out: Option<PathBuf>,
+}
 
 /// The runtime at one N.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
@@ -166,10 +182,10 @@ pub fn scenario(base: &Path, n: u32, ticks: u64) -> SwarmResult<Config> {
         format!("map.goal.x={goal:.1}"),
         format!("map.goal.y={goal:.1}"),
     ];
-    crate::config::load_config(base, &set)
+    Ok(swarmrt_harness::load_config(base, &set)?)
 }
 
-fn validate(args: &SwarmArgs) -> SwarmResult<()> {
+fn validate(args: &SwarmOptions) -> SwarmResult<()> {
     let user = |m: String| Err(SwarmError::User(m));
     if args
         .agents
@@ -205,7 +221,7 @@ fn validate(args: &SwarmArgs) -> SwarmResult<()> {
 }
 
 /// `swarm bench swarm`.
-pub fn run(args: &SwarmArgs, interrupt: &Interrupt) -> SwarmResult<()> {
+pub fn run(args: &SwarmOptions, interrupt: &Interrupt) -> SwarmResult<()> {
     validate(args)?;
     // Resolve every scenario first: a bad config or an impossible layout is a user error
     // before anything starts.
@@ -444,17 +460,14 @@ fn process_cpu_secs() -> f64 {
     ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
 }
 
-/// The same cores in one process, no IPC and no records: observe (on several threads from
-/// 64 robots), every agent's step, step.
+/// The same cores in one process, no IPC and no records: the harness's lock-step loop
+/// (observe on several threads from 64 robots, every running robot's step, the world's step),
+/// each phase timed.
 fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRow> {
     let n = cfg.robots.count as usize;
     let t = Instant::now();
-    let mut world = World::new(cfg, swarmrt_agent::registry::VOCABULARY)
-        .map_err(|e| anyhow::anyhow!("{}: {}", e.key, e.message))?;
-    let mut agents: Vec<Agent> = (0..n as u32).map(|id| Agent::new(cfg, id)).collect();
+    let mut run = Lockstep::new(cfg).map_err(|e| anyhow::anyhow!("{}: {}", e.key, e.message))?;
     let setup_secs = t.elapsed().as_secs_f64();
-    let mut obs = vec![Observation::empty(0, 0); n];
-    let mut commands = Vec::with_capacity(n);
     let (mut observe, mut think, mut step) = (Duration::ZERO, Duration::ZERO, Duration::ZERO);
     let start = Instant::now();
     let cpu_start = process_cpu_secs();
@@ -462,13 +475,12 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
     while ticks < cfg.scenario.ticks && start.elapsed() < IN_PROCESS_BUDGET {
         interrupt.check()?;
         let t0 = Instant::now();
-        world.observe(&mut obs);
+        run.observe();
         let t1 = Instant::now();
-        commands.clear();
-        commands.extend(agents.iter_mut().zip(&obs).map(|(a, o)| Some(a.step(o))));
+        run.think();
         let t2 = Instant::now();
-        world.step(&commands);
-        world.drain_events();
+        run.advance();
+        run.drain_events();
         let t3 = Instant::now();
         observe += t1 - t0;
         think += t2 - t1;
@@ -489,7 +501,7 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
         observe_ms: per(observe),
         agents_ms: per(think),
         step_ms: per(step),
-        radio_copies_per_tick: world.metrics().radio.sent as f64 / ticks.max(1) as f64,
+        radio_copies_per_tick: run.world().metrics().radio.sent as f64 / ticks.max(1) as f64,
         error: None,
     })
 }
