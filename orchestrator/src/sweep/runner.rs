@@ -1,11 +1,11 @@
 //! Runs a sweep's jobs, `jobs` at a time, each as a child `swarm run` writing an ordinary run
 //! directory.
 //!
-//! Why a child process per run rather than calling `processes::run` on threads: its
-//! supervisor reaps with `waitpid(-1)`, which would steal the exits of another run's robots
-//! in the same process. A child `swarm run` owns its reaper, its Ctrl-C handling and its
-//! cleanup, writes exactly what `swarm run` writes, and a crash in one run cannot take the
-//! sweep down. `--in-process` runs go the same way (`swarm run --in-process`), so both modes
+//! Why a child process per run rather than calling `processes::run` on threads: a crash or
+//! abort in one run's supervisor (or in the in-process cores) would take every other run and
+//! the sweep down with it, and a run's Ctrl-C handling and its cleanup on every exit path are
+//! per process. A child `swarm run` owns its Ctrl-C handling and its cleanup, writes exactly
+//! what `swarm run` writes, and a crash in one run cannot take the sweep down. `--in-process` runs go the same way (`swarm run --in-process`), so both modes
 //! share one path. Children run in their own process group: a terminal's Ctrl-C reaches only
 //! the sweep, which forwards it once to each running child (a second Ctrl-C forwards it
 //! again, which makes `swarm run` kill its run at once).
