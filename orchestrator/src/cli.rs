@@ -1,7 +1,10 @@
-//! Command-line definitions (DESIGN section 6).
+//! Command-line definitions (DESIGN section 6): every clap struct of `swarm` is here; each
+//! verb's logic is one file in `commands/`.
 
-use clap::{Parser, Subcommand};
+use std::ffi::OsString;
 use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
 
 /// Robot swarms as real processes over iceoryx2: run, check and clean up scenarios.
 #[derive(Parser, Debug)]
@@ -22,13 +25,13 @@ pub enum Cmd {
     /// Remove the iceoryx2 files and shared memory of runs whose orchestrator is gone.
     Clean,
     /// Run a scenario over the cross product of varied keys and seeds; write sweep.csv and plots.
-    Sweep(crate::commands::sweep::SweepArgs),
+    Sweep(SweepArgs),
     /// Measure the IPC and the lock-step swarm against their alternatives (runs `swarm-bench`).
     #[command(disable_help_flag = true)]
-    Bench(crate::commands::bench::BenchArgs),
+    Bench(BenchArgs),
     /// Seeded fault fuzzing of the consensus cores.
     #[command(subcommand)]
-    Fuzz(crate::commands::fuzz::FuzzCmd),
+    Fuzz(FuzzCmd),
 }
 
 /// `swarm run`.
@@ -61,4 +64,117 @@ pub struct CheckArgs {
     /// Override any config key (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+}
+
+/// `swarm sweep`.
+#[derive(Parser, Debug, Clone)]
+pub struct SweepArgs {
+    /// The scenario file.
+    pub config: PathBuf,
+    /// A config key and its values, e.g. --vary radio.loss=0,0.1,0.2 (repeatable). The first
+    /// key is the plots' x axis, the second their lines, further ones one plot per value.
+    #[arg(long = "vary", value_name = "KEY=V1,V2,...", required = true)]
+    pub vary: Vec<String>,
+    /// Seeds per combination: start-seed, start-seed + 1, ...
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    pub seeds: u64,
+    /// First seed [default: the config's scenario.seed].
+    #[arg(long)]
+    pub start_seed: Option<u64>,
+    /// Runs at once.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
+    pub jobs: u64,
+    /// Run every scenario with the same cores in one process each, no IPC (identical results).
+    #[arg(long)]
+    pub in_process: bool,
+    /// The sweep directory [default: sweeps/<scenario>-<time>/]; an existing one is resumed.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Override a config key in every run, e.g. --set scenario.ticks=300 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// A metric to plot and summarise, e.g. radio.dropped (repeatable) [default:
+    /// reached_target, down, collisions, and steps_to_target, radio.delivered when present].
+    #[arg(long = "metric", value_name = "NAME")]
+    pub metric: Vec<String>,
+}
+
+/// `swarm bench <what> [args]`: everything after `bench` goes to `swarm-bench` untouched,
+/// `--help` included, so `swarm bench --help` lists what `swarm-bench` measures.
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// `ipc` or `swarm` and their options (see `swarm bench --help`).
+    #[arg(
+        trailing_var_arg = true,
+        allow_hyphen_values = true,
+        value_name = "ARGS"
+    )]
+    pub args: Vec<OsString>,
+}
+
+/// `swarm fuzz <what>`.
+#[derive(Subcommand, Debug, Clone)]
+pub enum FuzzCmd {
+    /// The Raft-style election and replicated log: seeded faults, safety checked every tick,
+    /// liveness after the faults heal. Exit 0 when every seed holds.
+    Consensus(ConsensusArgs),
+    /// Measure ticks to the first leader and to re-election after the leader crashes.
+    Election(ElectionArgs),
+    /// Measure how often the quadrant leader choice leaves exactly one leader per group.
+    Quadrant(QuadrantArgs),
+}
+
+/// `swarm fuzz consensus`.
+#[derive(Args, Debug, Clone)]
+pub struct ConsensusArgs {
+    /// Number of seeds to run.
+    #[arg(long)]
+    pub seeds: u64,
+    /// First seed.
+    #[arg(long, default_value_t = 0)]
+    pub start_seed: u64,
+    /// Print every seed's case and outcome.
+    #[arg(long)]
+    pub verbose: bool,
+    /// Write each failing seed's note stream to DIR/seed-<S>.events.jsonl.
+    #[arg(long, value_name = "DIR")]
+    pub dump: Option<PathBuf>,
+}
+
+/// `swarm fuzz election`.
+#[derive(Args, Debug, Clone)]
+pub struct ElectionArgs {
+    /// Robot counts.
+    #[arg(long, value_delimiter = ',', default_value = "9,50")]
+    pub robots: Vec<u32>,
+    /// Bernoulli loss probabilities.
+    #[arg(long, value_delimiter = ',', default_value = "0,0.2,0.4")]
+    pub loss: Vec<f64>,
+    /// Runs (seeds) per combination.
+    #[arg(long, default_value_t = 21)]
+    pub runs: u64,
+    /// First seed.
+    #[arg(long, default_value_t = 0)]
+    pub start_seed: u64,
+    /// Ticks between the first leader and its crash.
+    #[arg(long, default_value_t = 100)]
+    pub leader_wait: u64,
+}
+
+/// `swarm fuzz quadrant`.
+#[derive(Args, Debug, Clone)]
+pub struct QuadrantArgs {
+    /// Trials per group size (3 to 9 robots).
+    #[arg(long, default_value_t = 200)]
+    pub trials: u64,
+    /// Bernoulli loss of the claims.
+    #[arg(long, default_value_t = 0.0)]
+    pub loss: f64,
+    /// Square metres per robot of the disc the group is placed in (larger: sparser groups,
+    /// robots that do not all see each other).
+    #[arg(long, default_value_t = 1.0)]
+    pub area_per_robot: f64,
+    /// First seed.
+    #[arg(long, default_value_t = 0)]
+    pub start_seed: u64,
 }

@@ -1,31 +1,17 @@
 //! `swarm bench`: the benchmarks live in their own package and binary, `swarm-bench`
 //! (`benchmarks/`); this verb only runs it.
 
-use std::ffi::OsString;
 use std::os::unix::process::CommandExt;
 use std::process::Command;
 
 use anyhow::anyhow;
-use clap::Args;
 
+use crate::cli::BenchArgs;
 use crate::error::{SwarmError, SwarmResult};
 use crate::processes;
 
 /// The benchmark binary, built beside `swarm` (`cargo build` builds both).
 pub const BENCH_BIN: &str = "swarm-bench";
-
-/// `swarm bench <what> [args]`: everything after `bench` goes to `swarm-bench` untouched,
-/// `--help` included, so `swarm bench --help` lists what `swarm-bench` measures.
-#[derive(Args, Debug, Clone)]
-pub struct BenchArgs {
-    /// `ipc` or `swarm` and their options (see `swarm bench --help`).
-    #[arg(
-        trailing_var_arg = true,
-        allow_hyphen_values = true,
-        value_name = "ARGS"
-    )]
-    pub args: Vec<OsString>,
-}
 
 /// Replaces this process with `swarm-bench <args>` (`exec`), found beside `swarm` like
 /// `swarm-world` and `swarm-agent`. The benchmark keeps this process's pid, terminal and

@@ -2,81 +2,13 @@
 //! (election times, quadrant leader uniqueness) on the same in-process harness.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
 use std::time::Instant;
 
-use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
+use crate::cli::{ConsensusArgs, ElectionArgs, FuzzCmd, QuadrantArgs};
 use crate::error::{SwarmError, SwarmResult};
 use crate::fuzz::{consensus, election, quadrant};
-
-/// `swarm fuzz <what>`.
-#[derive(Subcommand, Debug, Clone)]
-pub enum FuzzCmd {
-    /// The Raft-style election and replicated log: seeded faults, safety checked every tick,
-    /// liveness after the faults heal. Exit 0 when every seed holds.
-    Consensus(ConsensusArgs),
-    /// Measure ticks to the first leader and to re-election after the leader crashes.
-    Election(ElectionArgs),
-    /// Measure how often the quadrant leader choice leaves exactly one leader per group.
-    Quadrant(QuadrantArgs),
-}
-
-/// `swarm fuzz consensus`.
-#[derive(Args, Debug, Clone)]
-pub struct ConsensusArgs {
-    /// Number of seeds to run.
-    #[arg(long)]
-    pub seeds: u64,
-    /// First seed.
-    #[arg(long, default_value_t = 0)]
-    pub start_seed: u64,
-    /// Print every seed's case and outcome.
-    #[arg(long)]
-    pub verbose: bool,
-    /// Write each failing seed's note stream to DIR/seed-<S>.events.jsonl.
-    #[arg(long, value_name = "DIR")]
-    pub dump: Option<PathBuf>,
-}
-
-/// `swarm fuzz election`.
-#[derive(Args, Debug, Clone)]
-pub struct ElectionArgs {
-    /// Robot counts.
-    #[arg(long, value_delimiter = ',', default_value = "9,50")]
-    pub robots: Vec<u32>,
-    /// Bernoulli loss probabilities.
-    #[arg(long, value_delimiter = ',', default_value = "0,0.2,0.4")]
-    pub loss: Vec<f64>,
-    /// Runs (seeds) per combination.
-    #[arg(long, default_value_t = 21)]
-    pub runs: u64,
-    /// First seed.
-    #[arg(long, default_value_t = 0)]
-    pub start_seed: u64,
-    /// Ticks between the first leader and its crash.
-    #[arg(long, default_value_t = 100)]
-    pub leader_wait: u64,
-}
-
-/// `swarm fuzz quadrant`.
-#[derive(Args, Debug, Clone)]
-pub struct QuadrantArgs {
-    /// Trials per group size (3 to 9 robots).
-    #[arg(long, default_value_t = 200)]
-    pub trials: u64,
-    /// Bernoulli loss of the claims.
-    #[arg(long, default_value_t = 0.0)]
-    pub loss: f64,
-    /// Square metres per robot of the disc the group is placed in (larger: sparser groups,
-    /// robots that do not all see each other).
-    #[arg(long, default_value_t = 1.0)]
-    pub area_per_robot: f64,
-    /// First seed.
-    #[arg(long, default_value_t = 0)]
-    pub start_seed: u64,
-}
 
 fn progress(total: u64) -> ProgressBar {
     let pb = ProgressBar::with_draw_target(

@@ -5,13 +5,13 @@
 
 use std::collections::BTreeSet;
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use clap::Parser;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use swarmrt_scenario::Config;
 use swarmrt_world::WorldMetrics;
 
+use crate::cli::SweepArgs;
 use crate::config::load_config;
 use crate::error::{SwarmError, SwarmResult};
 use crate::run_dir;
@@ -20,39 +20,6 @@ use crate::sweep::report::{self, SummaryHead};
 use crate::sweep::runner::{self, Event, Job, Outcome, PoolOptions};
 use crate::sweep::stats::Groups;
 use crate::sweep::table::{self, FAILED, Row, SEED, SweepCsv, Table};
-
-/// `swarm sweep`.
-#[derive(Parser, Debug, Clone)]
-pub struct SweepArgs {
-    /// The scenario file.
-    pub config: PathBuf,
-    /// A config key and its values, e.g. --vary radio.loss=0,0.1,0.2 (repeatable). The first
-    /// key is the plots' x axis, the second their lines, further ones one plot per value.
-    #[arg(long = "vary", value_name = "KEY=V1,V2,...", required = true)]
-    pub vary: Vec<String>,
-    /// Seeds per combination: start-seed, start-seed + 1, ...
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
-    pub seeds: u64,
-    /// First seed [default: the config's scenario.seed].
-    #[arg(long)]
-    pub start_seed: Option<u64>,
-    /// Runs at once.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
-    pub jobs: u64,
-    /// Run every scenario with the same cores in one process each, no IPC (identical results).
-    #[arg(long)]
-    pub in_process: bool,
-    /// The sweep directory [default: sweeps/<scenario>-<time>/]; an existing one is resumed.
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Override a config key in every run, e.g. --set scenario.ticks=300 (repeatable).
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    pub set: Vec<String>,
-    /// A metric to plot and summarise, e.g. radio.dropped (repeatable) [default:
-    /// reached_target, down, collisions, and steps_to_target, radio.delivered when present].
-    #[arg(long = "metric", value_name = "NAME")]
-    pub metric: Vec<String>,
-}
 
 /// Scalar keys `swarm run` adds around the world's own metrics (commands/run.rs); `shell.*`
 /// and `startup_ms` only in processes mode.
