@@ -48,21 +48,23 @@
 //! 2. jitter: a surviving copy draws one integer uniform in `0..=jitter_ticks`, only when
 //!    `jitter_ticks > 0`.
 //!
-//! No hash map is ever iterated; the spatial grid and the link states are only looked up.
+//! No hash map is used, and the link states are only looked up, never iterated.
 //!
 //! # Performance
 //!
-//! Broadcast receivers are found with a uniform grid of cell size `range`, rebuilt at each
-//! [`RadioMedium::send`] that has a broadcast to route, so a send costs about
+//! Broadcast receivers are found with the world's spatial grid ([`Grid`]) over the talking
+//! robots, with cells of side `range`, rebuilt in place at each [`RadioMedium::send`] that has
+//! a broadcast to route (receivers sorted by id afterwards), so a send costs about
 //! O(N + copies · log) rather than O(N²). In-flight copies wait in one min-heap per receiver.
 
 use std::cmp::Ordering;
-use std::collections::{BTreeSet, BinaryHeap, HashMap};
+use std::collections::{BTreeSet, BinaryHeap};
 
 use rand::Rng as _;
 use swarmrt_protocol::config::{LossModel, RadioConfig};
 use swarmrt_protocol::{BROADCAST, Frame, MAX_INBOX};
 
+use crate::grid::Grid;
 use crate::rng::{self, Rng};
 
 /// Counters of the medium. Invariant: `sent == delivered + dropped + in_flight`, and `dropped`
@@ -154,80 +156,35 @@ impl Ord for Pending {
     }
 }
 
-/// Uniform grid over the talking robots' positions; rebuilt per send, only looked up.
-#[derive(Default)]
-struct Grid {
-    /// `None` when the range is not a positive finite number: every robot shares one cell.
-    cell: Option<f64>,
-    /// (cell x, cell y, robot id), sorted.
-    entries: Vec<(i64, i64, u32)>,
-    /// Cell -> range of `entries`.
-    cells: HashMap<(i64, i64), (usize, usize)>,
+/// Cell side of the receivers' grid: the range, so a query visits about 3 x 3 cells. Any
+/// positive side finds the same receivers (candidates are filtered by exact distance).
+fn grid_cell(range: f64) -> f64 {
+    if range > 0.0 && range.is_finite() {
+        range
+    } else {
+        1.0
+    }
 }
 
-impl Grid {
-    fn key(&self, p: (f64, f64)) -> (i64, i64) {
-        match self.cell {
-            // `as` saturates (and maps NaN to 0), so any position gets some cell.
-            Some(c) => ((p.0 / c).floor() as i64, (p.1 / c).floor() as i64),
-            None => (0, 0),
+/// Talking robots other than `src` within `range` of it, ascending id, into `out`. `grid`
+/// holds the talking robots with finite positions.
+fn receivers_of(grid: &Grid, src: usize, positions: &[(f64, f64)], range: f64, out: &mut Vec<u32>) {
+    out.clear();
+    let p = positions[src];
+    let visit = |id: usize| {
+        if id != src && in_range(p, positions[id], range) {
+            out.push(id as u32);
         }
+    };
+    if range == f64::INFINITY {
+        grid.each(visit);
+    } else {
+        // A hair beyond the range, so that rounding in the cell arithmetic can never leave out
+        // a robot `in_range` accepts: candidates are filtered by the exact distance anyway.
+        grid.near(p, range.max(0.0) * (1.0 + 1e-12) + 1e-9, visit);
     }
-
-    fn rebuild(&mut self, range: f64, positions: &[(f64, f64)], can_talk: &[bool]) {
-        self.cell = if range > 0.0 && range.is_finite() {
-            Some(range)
-        } else if range == f64::INFINITY {
-            None
-        } else {
-            // Range 0: only coincident robots are in range, and any positive cell finds them
-            // (a negative or NaN range has nobody in range at all).
-            Some(1.0)
-        };
-        self.entries.clear();
-        self.cells.clear();
-        for (id, (&p, &talk)) in positions.iter().zip(can_talk).enumerate() {
-            if talk && p.0.is_finite() && p.1.is_finite() {
-                let (cx, cy) = self.key(p);
-                self.entries.push((cx, cy, id as u32));
-            }
-        }
-        self.entries.sort_unstable();
-        let mut start = 0;
-        while start < self.entries.len() {
-            let (cx, cy, _) = self.entries[start];
-            let mut end = start + 1;
-            while end < self.entries.len() && (self.entries[end].0, self.entries[end].1) == (cx, cy)
-            {
-                end += 1;
-            }
-            self.cells.insert((cx, cy), (start, end));
-            start = end;
-        }
-    }
-
-    /// Talking robots other than `src` within `range` of it, ascending id, into `out`.
-    fn receivers(&self, src: usize, positions: &[(f64, f64)], range: f64, out: &mut Vec<u32>) {
-        out.clear();
-        let p = positions[src];
-        let (cx, cy) = self.key(p);
-        let span: i64 = if self.cell.is_some() { 1 } else { 0 };
-        for dx in -span..=span {
-            for dy in -span..=span {
-                let k = (cx.saturating_add(dx), cy.saturating_add(dy));
-                if let Some(&(a, b)) = self.cells.get(&k) {
-                    for &(_, _, id) in &self.entries[a..b] {
-                        if id as usize != src && in_range(p, positions[id as usize], range) {
-                            out.push(id);
-                        }
-                    }
-                }
-            }
-        }
-        out.sort_unstable();
-        // Saturated cell keys can make two neighbour lookups hit the same cell.
-        out.dedup();
-    }
+    // The grid reports by cell; routing goes by ascending id.
+    out.sort_unstable();
 }
 
 fn in_range(a: (f64, f64), b: (f64, f64), range: f64) -> bool {
@@ -251,6 +208,7 @@ pub struct RadioMedium {
     seq: u64,
     /// Directed links (src, dst) currently in the Gilbert-Elliott Bad state; absent = Good.
     bad_links: BTreeSet<(u32, u32)>,
+    /// The talking robots with finite positions, rebuilt per send that has a broadcast.
     grid: Grid,
     scratch: Vec<u32>,
     stats: RadioStats,
@@ -308,7 +266,9 @@ impl RadioMedium {
                     .any(|f| f.dst == BROADCAST)
         });
         if any_broadcast {
-            self.grid.rebuild(range, positions, can_talk);
+            self.grid.rebuild(positions, grid_cell(range), |i| {
+                can_talk[i] && positions[i].0.is_finite() && positions[i].1.is_finite()
+            });
         }
 
         let mut receivers = std::mem::take(&mut self.scratch);
@@ -331,7 +291,7 @@ impl RadioMedium {
                 let mut slot = None;
                 if copy.dst == BROADCAST {
                     if !receivers_known {
-                        self.grid.receivers(src, positions, range, &mut receivers);
+                        receivers_of(&self.grid, src, positions, range, &mut receivers);
                         receivers_known = true;
                     }
                     for &dst in &receivers {

@@ -661,3 +661,52 @@ fn same_seed_same_inboxes_other_seed_other_losses() {
     assert_eq!(losses(1), losses(1));
     assert_ne!(losses(1), losses(2));
 }
+
+#[test]
+fn odd_ranges_and_positions_route_like_brute_force() {
+    // Infinite, zero, negative zero, negative, NaN and huge ranges; coincident robots,
+    // robots at infinity and at NaN (never receivers; senders that hear only what the exact
+    // distance says).
+    let pos = [
+        (0.0, 0.0),
+        (0.0, 0.0),
+        (3.0, 4.0),
+        (1e3, -1e3),
+        (f64::INFINITY, 0.0),
+        (f64::NAN, 1.0),
+        (0.0, f64::NEG_INFINITY),
+        (-2.0, 0.5),
+    ];
+    let n = pos.len();
+    for range in [
+        f64::INFINITY,
+        0.0,
+        -0.0,
+        -1.0,
+        f64::NAN,
+        5.0,
+        1e300,
+        f64::MAX,
+    ] {
+        let talk = vec![true; n];
+        let cfg = RadioConfig {
+            range,
+            line_of_sight: true,
+            ..base_cfg()
+        };
+        let mut m = RadioMedium::new(cfg, 1, n);
+        let out: Vec<Vec<Frame>> = (0..n).map(|_| vec![frame(BROADCAST, 0)]).collect();
+        let refs: Vec<&[Frame]> = out.iter().map(|v| v.as_slice()).collect();
+        let mut routed = Vec::new();
+        m.send(0, &refs, &pos, &talk, &mut |a, b| {
+            routed.push((a, b));
+            false
+        });
+        let finite = |p: (f64, f64)| p.0.is_finite() && p.1.is_finite();
+        let expected: Vec<(usize, usize)> = (0..n)
+            .flat_map(|tx| (0..n).map(move |rx| (tx, rx)))
+            .filter(|&(tx, rx)| tx != rx && finite(pos[rx]) && in_range(pos[tx], pos[rx], range))
+            .collect();
+        assert_eq!(routed, expected, "range {range}");
+    }
+}
