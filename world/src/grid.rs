@@ -9,17 +9,50 @@ pub struct Grid {
     rows: usize,
     starts: Vec<u32>,
     items: Vec<u32>,
+    /// Scratch for [`Grid::rebuild`], kept to reuse its allocation.
+    fill: Vec<u32>,
+}
+
+impl Default for Grid {
+    /// A grid holding nothing (one empty cell), to [`Grid::rebuild`] later.
+    fn default() -> Self {
+        Grid {
+            cell: 1.0,
+            origin: (0.0, 0.0),
+            cols: 1,
+            rows: 1,
+            starts: vec![0, 0],
+            items: Vec::new(),
+            fill: Vec::new(),
+        }
+    }
 }
 
 impl Grid {
     /// Buckets `points` into square cells of side `cell` (clamped to a sane minimum).
     pub fn build(points: &[(f64, f64)], cell: f64) -> Grid {
+        let mut grid = Grid::default();
+        grid.rebuild(points, cell, |_| true);
+        grid
+    }
+
+    /// Buckets again, in place (reusing the allocations), the points `i` for which `keep(i)`
+    /// holds; queries then report indices into `points`. The bounds of the grid are those of
+    /// the kept points only, so a point left out (say, one at infinity) cannot stretch it.
+    pub fn rebuild(&mut self, points: &[(f64, f64)], cell: f64, keep: impl Fn(usize) -> bool) {
         let cell = cell.max(1e-3);
+        let kept = || {
+            points
+                .iter()
+                .enumerate()
+                .filter(|&(i, _)| keep(i))
+                .map(|(_, p)| p)
+        };
         let (mut x0, mut y0, mut x1, mut y1) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
-        if let Some(&(x, y)) = points.first() {
+        if let Some(&(x, y)) = kept().next() {
             (x0, y0, x1, y1) = (x, y, x, y);
         }
-        for &(x, y) in points {
+        for &(x, y) in kept() {
             x0 = x0.min(x);
             y0 = y0.min(y);
             x1 = x1.max(x);
@@ -30,33 +63,43 @@ impl Grid {
         let cell = cell.max((x1 - x0) / max_side).max((y1 - y0) / max_side);
         let cols = ((x1 - x0) / cell) as usize + 1;
         let rows = ((y1 - y0) / cell) as usize + 1;
-        let mut counts = vec![0u32; cols * rows + 1];
         let idx = |p: &(f64, f64)| -> usize {
             let c = (((p.0 - x0) / cell) as usize).min(cols - 1);
             let r = (((p.1 - y0) / cell) as usize).min(rows - 1);
             r * cols + c
         };
-        for p in points {
+        let counts = &mut self.starts;
+        counts.clear();
+        counts.resize(cols * rows + 1, 0);
+        let mut len = 0;
+        for p in kept() {
             counts[idx(p) + 1] += 1;
+            len += 1;
         }
         for i in 1..counts.len() {
             counts[i] += counts[i - 1];
         }
-        let starts = counts.clone();
-        let mut fill = counts;
-        let mut items = vec![0u32; points.len()];
+        self.fill.clear();
+        self.fill.extend_from_slice(counts);
+        self.items.clear();
+        self.items.resize(len, 0);
         for (i, p) in points.iter().enumerate() {
-            let k = idx(p);
-            items[fill[k] as usize] = i as u32;
-            fill[k] += 1;
+            if keep(i) {
+                let k = idx(p);
+                self.items[self.fill[k] as usize] = i as u32;
+                self.fill[k] += 1;
+            }
         }
-        Grid {
-            cell,
-            origin: (x0, y0),
-            cols,
-            rows,
-            starts,
-            items,
+        self.cell = cell;
+        self.origin = (x0, y0);
+        self.cols = cols;
+        self.rows = rows;
+    }
+
+    /// Calls `f` with every index in the grid, by cell, then insertion.
+    pub fn each(&self, mut f: impl FnMut(usize)) {
+        for &i in &self.items {
+            f(i as usize);
         }
     }
 
@@ -109,5 +152,40 @@ mod tests {
                 .collect();
             assert_eq!(got, want, "query {qi}");
         }
+    }
+
+    #[test]
+    fn rebuild_in_place_keeps_only_the_kept_points() {
+        let pts: Vec<(f64, f64)> = (0..300)
+            .map(|i| (((i * 37) % 101) as f64 * 0.3, ((i * 53) % 97) as f64 * 0.3))
+            .collect();
+        let keep = |i: usize| !i.is_multiple_of(3);
+        // Built over everything first, then again over a subset in the same allocations.
+        let mut g = Grid::build(&pts, 1.0);
+        g.rebuild(&pts, 2.0, keep);
+        let mut all = vec![];
+        g.each(|i| all.push(i));
+        all.sort();
+        let kept: Vec<usize> = (0..pts.len()).filter(|&i| keep(i)).collect();
+        assert_eq!(all, kept);
+        for q in pts.iter().step_by(5) {
+            let mut got = vec![];
+            g.near(*q, 2.5, |i| {
+                if ((pts[i].0 - q.0).powi(2) + (pts[i].1 - q.1).powi(2)).sqrt() <= 2.5 {
+                    got.push(i)
+                }
+            });
+            got.sort();
+            let want: Vec<usize> = kept
+                .iter()
+                .copied()
+                .filter(|&i| ((pts[i].0 - q.0).powi(2) + (pts[i].1 - q.1).powi(2)).sqrt() <= 2.5)
+                .collect();
+            assert_eq!(got, want);
+        }
+        // Nothing kept: every query finds nothing.
+        g.rebuild(&pts, 2.0, |_| false);
+        g.near(pts[0], 100.0, |i| panic!("found {i} in an empty grid"));
+        Grid::default().near((1.0, 1.0), 5.0, |i| panic!("found {i} in an empty grid"));
     }
 }

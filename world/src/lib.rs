@@ -3,6 +3,10 @@
 //! The core ([`World`]) is a deterministic state machine; the process shell (`shell`) only
 //! moves its observations and commands through iceoryx2.
 //!
+//! [`World::step`] (`world/mod.rs`) calls one stage per sibling file: `commands.rs`,
+//! `route.rs` (radio), `kinematics.rs`, `contacts.rs`, `sensing.rs` ([`World::observe`], goal
+//! check) and `faults.rs`; `stage_times.rs` times them when the shell asks ([`timing`]).
+//!
 //! ```
 //! use swarmrt_protocol::{Command, Observation, Vocabulary};
 //! use swarmrt_scenario::Config;
@@ -44,4 +48,4 @@ pub mod shell;
 pub mod timing;
 pub mod world;
 
-pub use world::{Event, ProcessSignal, Robot, World, WorldMetrics};
+pub use world::{Event, ProcessSignal, Robot, Stage, StageTimes, World, WorldMetrics};

@@ -26,6 +26,18 @@ pub struct MapError {
     pub message: String,
 }
 
+impl std::fmt::Display for MapError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.key.is_empty() {
+            f.write_str(&self.message)
+        } else {
+            write!(f, "key `{}`: {}", self.key, self.message)
+        }
+    }
+}
+
+impl std::error::Error for MapError {}
+
 impl Map {
     /// Builds the compound once per run: bounds become four walls.
     pub fn build(cfg: &MapConfig) -> Result<Map, MapError> {
@@ -178,6 +190,15 @@ mod tests {
         };
         let e = Map::build(&cfg).err().unwrap();
         assert_eq!(e.key, "map.polygons[0].points");
+        assert_eq!(
+            e.to_string(),
+            "key `map.polygons[0].points`: expected a polygon with non-zero area"
+        );
+        let keyless = MapError {
+            key: String::new(),
+            message: "no room".to_string(),
+        };
+        assert_eq!(keyless.to_string(), "no room");
         cfg.polygons.clear();
         assert!(Map::build(&cfg).is_ok());
     }

@@ -197,6 +197,8 @@ pub fn run(
     let mut commands: Vec<Option<Command>> = vec![None; n];
     let mut last_progress = Instant::now();
     let mut timer = TickTimer::default();
+    // The world times its stages too (wall clock, for `shell.timing` only).
+    world.set_stage_timing(true);
     // Robots restarted by the schedule whose fresh process has not said hello yet.
     let mut reborn: BTreeSet<u32> = BTreeSet::new();
     let events = world.drain_events();
@@ -337,6 +339,7 @@ pub fn run(
             wait: ns(t2, t3),
             step: ns(t3, t4),
             record: ns(t4, t5),
+            stages: world.take_stage_times(),
         });
         if world.tick() <= EARLY_REPORTS || last_progress.elapsed() >= PROGRESS_EVERY {
             last_progress = Instant::now();

@@ -6,6 +6,8 @@
 
 use serde::Serialize;
 
+use crate::world::{Stage, StageTimes};
+
 /// Bucket width: each bucket spans a factor of this.
 const GROWTH: f64 = 1.01;
 /// Buckets cover 1 ns .. ~10 s.
@@ -24,6 +26,8 @@ pub struct TickPhases {
     pub step: u64,
     /// Writing the tick's records.
     pub record: u64,
+    /// The world's stages within `observe` and `step` (not added to the total again).
+    pub stages: StageTimes,
 }
 
 impl TickPhases {
@@ -39,6 +43,7 @@ pub struct TickTimer {
     hist: Vec<u64>,
     ticks: u64,
     sums: [u128; 5],
+    stage_sums: [u128; Stage::ALL.len()],
     max: u64,
 }
 
@@ -48,6 +53,7 @@ impl Default for TickTimer {
             hist: vec![0; BUCKETS],
             ticks: 0,
             sums: [0; 5],
+            stage_sums: [0; Stage::ALL.len()],
             max: 0,
         }
     }
@@ -88,6 +94,20 @@ pub struct TickTiming {
     pub step_ms_mean: f64,
     /// Mean ms per tick writing records.
     pub record_ms_mean: f64,
+    /// Mean ms per tick of the world's faults stage (part of `step_ms_mean`).
+    pub stage_faults_ms_mean: f64,
+    /// Mean ms per tick of the world's commands stage (part of `step_ms_mean`).
+    pub stage_commands_ms_mean: f64,
+    /// Mean ms per tick of the world's radio stage, routing and delivery (part of
+    /// `step_ms_mean`).
+    pub stage_radio_ms_mean: f64,
+    /// Mean ms per tick of the world's kinematics stage (part of `step_ms_mean`).
+    pub stage_kinematics_ms_mean: f64,
+    /// Mean ms per tick of the world's contacts stage (part of `step_ms_mean`).
+    pub stage_contacts_ms_mean: f64,
+    /// Mean ms per tick of the world's sensing stage: the observations (most of
+    /// `observe_ms_mean`) and the goal check (part of `step_ms_mean`).
+    pub stage_sensing_ms_mean: f64,
 }
 
 impl TickTimer {
@@ -104,6 +124,9 @@ impl TickTimer {
             .zip([p.observe, p.publish, p.wait, p.step, p.record])
         {
             *s += v as u128;
+        }
+        for (s, stage) in self.stage_sums.iter_mut().zip(Stage::ALL) {
+            *s += p.stages.get(stage).as_nanos();
         }
     }
 
@@ -127,6 +150,7 @@ impl TickTimer {
     pub fn summary(&self) -> TickTiming {
         let n = self.ticks.max(1) as f64;
         let mean_ms = |i: usize| self.sums[i] as f64 / n / 1e6;
+        let stage_ms = |s: Stage| self.stage_sums[s as usize] as f64 / n / 1e6;
         let total: u128 = self.sums.iter().sum();
         TickTiming {
             ticks: self.ticks,
@@ -139,6 +163,12 @@ impl TickTimer {
             wait_ms_mean: mean_ms(2),
             step_ms_mean: mean_ms(3),
             record_ms_mean: mean_ms(4),
+            stage_faults_ms_mean: stage_ms(Stage::Faults),
+            stage_commands_ms_mean: stage_ms(Stage::Commands),
+            stage_radio_ms_mean: stage_ms(Stage::Radio),
+            stage_kinematics_ms_mean: stage_ms(Stage::Kinematics),
+            stage_contacts_ms_mean: stage_ms(Stage::Contacts),
+            stage_sensing_ms_mean: stage_ms(Stage::Sensing),
         }
     }
 }
@@ -164,5 +194,46 @@ mod tests {
         assert!((s.wait_ms_mean - 500.5).abs() < 1e-9);
         assert!((s.seconds - 500.5).abs() < 1e-6);
         assert_eq!(TickTimer::default().summary().tick_ms_median, 0.0);
+        assert_eq!(s.stage_radio_ms_mean, 0.0, "no stage was timed");
+    }
+
+    #[test]
+    fn world_stage_times_become_means_per_tick() {
+        use swarmrt_protocol::Observation;
+        use swarmrt_scenario::Config;
+        let cfg = Config::from_toml_str(
+            "timing.toml",
+            r#"
+                [scenario]
+                name = "timing"
+                ticks = 10
+                [map]
+                bounds = [0.0, 0.0, 10.0, 10.0]
+                goal = { x = 8.0, y = 8.0, radius = 1.0 }
+                [robots]
+                count = 2
+            "#,
+            &[],
+        )
+        .unwrap();
+        let mut world = crate::World::new(&cfg, swarmrt_protocol::Vocabulary::ANY).unwrap();
+        world.set_stage_timing(true);
+        let mut obs = vec![Observation::empty(0, 0); 2];
+        let mut timer = TickTimer::default();
+        let mut sensing = 0u128;
+        for _ in 0..2 {
+            world.observe(&mut obs);
+            world.step(&[None, None]);
+            let stages = world.take_stage_times();
+            sensing += stages.get(Stage::Sensing).as_nanos();
+            timer.add(TickPhases {
+                stages,
+                ..TickPhases::default()
+            });
+        }
+        let s = timer.summary();
+        assert!(sensing > 0);
+        assert_eq!(s.stage_sensing_ms_mean, sensing as f64 / 2.0 / 1e6);
+        assert_eq!(s.tick_ms_max, 0.0, "stages are not added to the tick again");
     }
 }

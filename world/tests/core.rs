@@ -2,12 +2,14 @@
 //! validation and determinism.
 
 use std::f64::consts::PI;
+use std::time::Duration;
 use swarmrt_agent::behaviours::formation::FormationNote;
 use swarmrt_agent::behaviours::goto::Beacon;
 use swarmrt_agent::registry::VOCABULARY;
 use swarmrt_agent::{Note, RadioMsg};
 use swarmrt_protocol::{BROADCAST, Command, MAX_OUTBOX, NoteJson, Observation, RobotState};
 use swarmrt_scenario::Config;
+use swarmrt_world::world::Stage;
 use swarmrt_world::{Event, World};
 
 /// A message to fill outboxes with.
@@ -396,6 +398,51 @@ fn same_seed_same_run_with_noise_and_loss() {
     };
     assert_eq!(run(1), run(1));
     assert_ne!(run(1), run(2));
+}
+
+#[test]
+fn stage_timing_is_off_by_default_and_changes_nothing() {
+    let run = |timing: bool| {
+        let cfg = config(&[
+            "robots.count=4",
+            "robots.start={ x = 5.0, y = 7.0, spacing = 1.0 }",
+            "robots.noise={ pose = 0.05, heading = 0.02, lidar = 0.05 }",
+            "radio.loss=0.3",
+        ]);
+        let mut w = World::new(&cfg, VOCABULARY).unwrap();
+        assert!(!w.stage_times().enabled());
+        w.set_stage_timing(timing);
+        let mut events = Vec::new();
+        for _ in 0..20 {
+            let mut obs = vec![Observation::empty(0, 0); 4];
+            w.observe(&mut obs);
+            let cmds: Vec<_> = (0..4)
+                .map(|i| {
+                    let mut c = Command::act(i, w.tick());
+                    c.v = 0.3;
+                    c.omega = 0.5;
+                    c.lidar_on = 1;
+                    c.push_frame(BROADCAST, &BEACON).unwrap();
+                    Some(c)
+                })
+                .collect();
+            w.step(&cmds);
+            events.extend(w.drain_events());
+        }
+        let times = w.take_stage_times();
+        assert_eq!(times.enabled(), timing);
+        assert_eq!(w.stage_times().total(), Duration::ZERO, "taken");
+        (w.robots().to_vec(), events, w.metrics(), times)
+    };
+    let (robots_off, events_off, metrics_off, off) = run(false);
+    let (robots_on, events_on, metrics_on, on) = run(true);
+    assert_eq!(robots_off, robots_on);
+    assert_eq!(events_off, events_on);
+    assert_eq!(metrics_off, metrics_on);
+    assert_eq!(off.total(), Duration::ZERO, "no clock read while off");
+    // Lower bounds only: twenty observations of four robots with lidar take some time.
+    assert!(on.get(Stage::Sensing) > Duration::ZERO);
+    assert!(on.total() >= on.get(Stage::Sensing));
 }
 
 #[test]

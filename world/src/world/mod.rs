@@ -1,0 +1,358 @@
+//! The world core: a deterministic state machine. `observe` fills every robot's
+//! [`Observation`](swarmrt_protocol::Observation) for the current tick, `step` takes every
+//! robot's [`Command`] and advances one tick. No I/O, no clock (unless the shell switches on
+//! [`StageTimes`]); every random draw comes from the run seed.
+//!
+//! [`World::step`] is a short sequence of stages over the world's state, each in a sibling
+//! file (like rapier's `physics_pipeline/`):
+//!
+//! 1. `commands.rs`: accept or refuse each command; its notes become events.
+//! 2. `route.rs`: route the frames sent at this tick through the [`RadioMedium`].
+//! 3. `kinematics.rs`: integrate the unicycles, with swept obstacle checks.
+//! 4. `contacts.rs`: robot-robot contacts knock both robots down.
+//! 5. The tick advances; `route.rs` delivers the frames now due and `sensing.rs` checks who
+//!    reached the goal.
+//! 6. `faults.rs`: the faults of the new tick boundary.
+//!
+//! `sensing.rs` also builds the observations ([`World::observe`]); `stage_times.rs` adds up
+//! the wall-clock time of each stage when the shell asks for it.
+
+use serde::Serialize;
+use std::collections::BTreeSet;
+use swarmrt_protocol::{Command, Frame, NoteJson, RobotState, Vocabulary};
+use swarmrt_scenario::Config;
+pub use swarmrt_scenario::wrap_angle;
+
+use crate::map::{Map, MapError};
+use crate::radio::{RadioMedium, RadioStats};
+use crate::rng::{self, Rng};
+
+mod commands;
+mod contacts;
+mod faults;
+mod kinematics;
+mod route;
+mod sensing;
+mod stage_times;
+
+use faults::Outage;
+pub use faults::ProcessSignal;
+pub use sensing::{OBSERVE_THREADS, PARALLEL_OBSERVE_MIN};
+pub use stage_times::{Stage, StageTimes};
+
+/// The truth about one robot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Robot {
+    /// Robot id (index).
+    pub id: u32,
+    /// True x position, metres.
+    pub x: f64,
+    /// True y position, metres.
+    pub y: f64,
+    /// True heading, radians in (-pi, pi].
+    pub theta: f64,
+    /// Forward speed applied in the last step.
+    pub v: f64,
+    /// Turn rate applied in the last step.
+    pub omega: f64,
+    /// Whether the lidar is on for the current observation.
+    pub lidar_on: bool,
+    /// Lifecycle state.
+    pub state: RobotState,
+    /// First tick at which the robot was inside the goal radius.
+    pub reached_tick: Option<u64>,
+}
+
+/// Something worth a line in `events.jsonl`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "event", rename_all = "snake_case")]
+pub enum Event {
+    /// A robot hit an obstacle, a wall or another robot and went down.
+    Collision {
+        /// Tick of the step in which it happened.
+        tick: u64,
+        /// The robot that went down.
+        robot: u32,
+        /// The other robot, when it was a robot.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        other: Option<u32>,
+    },
+    /// A robot entered the goal radius for the first time.
+    Reached {
+        /// Tick at which it was first inside.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+    },
+    /// A robot's process is gone; it stays where it is as an obstacle.
+    Died {
+        /// Tick from which it counts as dead.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+        /// Why (e.g. "process exited: signal 9").
+        reason: String,
+    },
+    /// A scheduled fault took effect or ended.
+    Fault {
+        /// Tick from which it holds.
+        tick: u64,
+        /// `kill`, `freeze`, `thaw`, `restart`, `rejoin`, `partition_start`, `partition_end`,
+        /// `blackout_start`, `blackout_end`, or `kill_skipped` / `freeze_skipped` /
+        /// `restart_skipped` when the target was dead, already out, or a `"leader"` target
+        /// had no leader.
+        fault: String,
+        /// The robot, for a process fault.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        robot: Option<u32>,
+        /// True for a fault drawn from `faults.kill_rate` / `faults.freeze_rate`.
+        #[serde(skip_serializing_if = "std::ops::Not::not")]
+        random: bool,
+    },
+    /// A robot's note about its own decisions (role, turn, consensus state).
+    Note {
+        /// Tick of the command that carried it.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+        /// What it said, as the robots' vocabulary renders it.
+        note: NoteJson,
+    },
+    /// A robot sent a command the world refused (logged once per robot and reason).
+    Rejected {
+        /// Tick of the refused command.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+        /// What was wrong.
+        reason: String,
+    },
+}
+
+/// Scalar outcome of a run so far.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct WorldMetrics {
+    /// Ticks stepped.
+    pub ticks: u64,
+    /// Robots that reached the goal.
+    pub reached_target: u32,
+    /// Collision events.
+    pub collisions: u32,
+    /// Robots knocked down.
+    pub down: u32,
+    /// Robots whose process died.
+    pub dead: u32,
+    /// Robot-ticks with the lidar on (the energy metric).
+    pub lidar_on_ticks: u64,
+    /// Commands refused at the world boundary.
+    pub rejected: u64,
+    /// Faults that took effect (kills, freezes, restarts, partitions and blackouts begun).
+    pub faults_injected: u64,
+    /// Robot processes restarted by the schedule.
+    pub restarts: u64,
+    /// Robot-ticks spent frozen.
+    pub frozen_ticks: u64,
+    /// Radio counters.
+    pub radio: RadioStats,
+}
+
+/// The world of one run.
+pub struct World {
+    cfg: Config,
+    /// What the robots may say: checks radio payloads, renders notes for the record.
+    vocabulary: Vocabulary,
+    map: Map,
+    robots: Vec<Robot>,
+    radio: RadioMedium,
+    tick: u64,
+    sensor_rng: Vec<Rng>,
+    inboxes: Vec<Vec<Frame>>,
+    events: Vec<Event>,
+    rejected_once: BTreeSet<(u32, &'static str)>,
+    metrics: WorldMetrics,
+    /// The robot that last reported itself leader (the target of a `"leader"` fault).
+    leader: Option<u32>,
+    /// Process faults the shell must still carry out with real signals.
+    signals: Vec<ProcessSignal>,
+    /// Per robot, the freeze or restart it is in.
+    outages: Vec<Option<Outage>>,
+    /// Per robot, how many times the schedule restarted its process.
+    incarnations: Vec<u32>,
+    /// Draws of `faults.kill_rate` and `faults.freeze_rate`.
+    fault_rng: Rng,
+    /// Wall-clock time per stage, while the shell has timing on.
+    stage_times: StageTimes,
+}
+
+impl World {
+    /// Builds the world at tick 0 with every robot at its start position. `vocabulary` is
+    /// the robots' (`swarmrt_agent::registry::VOCABULARY`), or [`Vocabulary::ANY`] for a world
+    /// driven without robots.
+    pub fn new(cfg: &Config, vocabulary: Vocabulary) -> Result<World, MapError> {
+        let map = Map::build(&cfg.map)?;
+        let seed = cfg.scenario.seed;
+        let heading = wrap_angle(cfg.start_heading());
+        let radius = cfg.robots.radius;
+        let starts = cfg
+            .start_positions(|x, y| map.clearance((x, y)) >= radius * 1.5)
+            .ok_or_else(|| MapError {
+                key: "robots.start".to_string(),
+                message: format!(
+                    "expected room for {} robots {} m apart near ({}, {}), inside map.bounds and clear of obstacles; \
+                     the map has less (lower robots.count or robots.start.spacing, or move robots.start)",
+                    cfg.robots.count, cfg.robots.start.spacing, cfg.robots.start.x, cfg.robots.start.y
+                ),
+            })?;
+        let robots: Vec<Robot> = starts
+            .into_iter()
+            .enumerate()
+            .map(|(i, (x, y))| Robot {
+                id: i as u32,
+                x,
+                y,
+                theta: heading,
+                v: 0.0,
+                omega: 0.0,
+                lidar_on: true,
+                state: RobotState::Active,
+                reached_tick: None,
+            })
+            .collect();
+        let n = robots.len();
+        let mut world = World {
+            cfg: cfg.clone(),
+            vocabulary,
+            map,
+            radio: RadioMedium::new(cfg.radio, seed, n),
+            tick: 0,
+            sensor_rng: (0..n)
+                .map(|i| rng::stream(seed, "sensor", i as u64))
+                .collect(),
+            inboxes: vec![Vec::new(); n],
+            events: Vec::new(),
+            rejected_once: BTreeSet::new(),
+            metrics: WorldMetrics::default(),
+            leader: None,
+            signals: Vec::new(),
+            outages: vec![None; n],
+            incarnations: vec![0; n],
+            fault_rng: rng::stream(seed, "faults", 0),
+            stage_times: StageTimes::default(),
+            robots,
+        };
+        world.check_goal();
+        world.apply_faults();
+        Ok(world)
+    }
+
+    /// The current tick (the one `observe` describes).
+    pub fn tick(&self) -> u64 {
+        self.tick
+    }
+
+    /// Every robot's true state.
+    pub fn robots(&self) -> &[Robot] {
+        &self.robots
+    }
+
+    /// The map, for queries such as line of sight.
+    pub fn map(&self) -> &Map {
+        &self.map
+    }
+
+    /// The config the world was built from.
+    pub fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    /// Metrics so far.
+    pub fn metrics(&self) -> WorldMetrics {
+        let mut m = self.metrics.clone();
+        m.radio = self.radio.stats();
+        m
+    }
+
+    /// Takes the events produced since the last call, in the order they happened.
+    pub fn drain_events(&mut self) -> Vec<Event> {
+        std::mem::take(&mut self.events)
+    }
+
+    /// True when the run should end: the tick budget is spent, or (with
+    /// `scenario.stop_when_done`) every robot reached the goal or is down or dead.
+    pub fn finished(&self) -> bool {
+        self.tick >= self.cfg.scenario.ticks
+            || (self.cfg.scenario.stop_when_done
+                && self
+                    .robots
+                    .iter()
+                    .all(|r| r.reached_tick.is_some() || r.state != RobotState::Active))
+    }
+
+    /// Marks a robot whose process is gone as dead from the current tick; it stays as an
+    /// obstacle. Idempotent.
+    pub fn mark_dead(&mut self, robot: u32, reason: &str) {
+        let Some(r) = self.robots.get_mut(robot as usize) else {
+            return;
+        };
+        if r.state == RobotState::Dead {
+            return;
+        }
+        r.state = RobotState::Dead;
+        self.outages[robot as usize] = None;
+        r.v = 0.0;
+        r.omega = 0.0;
+        r.lidar_on = false;
+        self.metrics.dead += 1;
+        self.events.push(Event::Died {
+            tick: self.tick,
+            robot,
+            reason: reason.to_string(),
+        });
+    }
+
+    /// Advances one tick. `commands[i]` is robot i's answer to this tick's observation, or
+    /// `None` if it sent none (dead, or a shell that gave up waiting). Invalid commands are
+    /// refused, counted and treated as "stop, send nothing".
+    pub fn step(&mut self, commands: &[Option<Command>]) {
+        assert_eq!(
+            commands.len(),
+            self.robots.len(),
+            "one command slot per robot"
+        );
+        let accepted = self.timed(Stage::Commands, |w| w.accept_commands(commands));
+        self.timed(Stage::Radio, |w| w.route_radio(&accepted));
+        self.timed(Stage::Kinematics, |w| w.integrate(&accepted));
+        self.timed(Stage::Contacts, |w| w.robot_contacts());
+        self.tick += 1;
+        self.metrics.ticks = self.tick;
+        self.timed(Stage::Radio, |w| w.deliver_radio());
+        self.timed(Stage::Sensing, |w| w.check_goal());
+        self.timed(Stage::Faults, |w| w.apply_faults());
+    }
+
+    /// Switches the per-stage timers on or off (off when the world is built: the core reads
+    /// no clock unless the shell asks). Switching keeps the times so far.
+    pub fn set_stage_timing(&mut self, on: bool) {
+        self.stage_times.set_enabled(on);
+    }
+
+    /// Wall-clock time spent in each stage since timing was switched on or last taken.
+    pub fn stage_times(&self) -> StageTimes {
+        self.stage_times
+    }
+
+    /// [`World::stage_times`], then starts counting from zero again (timing stays as it was).
+    pub fn take_stage_times(&mut self) -> StageTimes {
+        let times = self.stage_times;
+        self.stage_times.clear();
+        times
+    }
+
+    /// Runs one stage, adding its wall-clock time to `stage` when timing is on.
+    fn timed<R>(&mut self, stage: Stage, f: impl FnOnce(&mut Self) -> R) -> R {
+        let start = self.stage_times.start();
+        let out = f(self);
+        self.stage_times.stop(stage, start);
+        out
+    }
+}

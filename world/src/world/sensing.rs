@@ -1,0 +1,269 @@
+//! Stage `sensing`: each robot's [`Observation`] (noisy pose, lidar against the map and the
+//! other bodies, range-and-bearing, goal sensor, inbox), and the goal check after each step.
+
+use rand_distr::{Distribution, Normal};
+use swarmrt_protocol::{
+    Frame, MAX_INBOX, MAX_LIDAR_RAYS, MAX_NEIGHBOURS, Neighbour, Observation, RobotState,
+};
+
+use super::{Event, Robot, Stage, World, wrap_angle};
+use crate::grid::Grid;
+use crate::map::Map;
+use crate::rng::Rng;
+
+impl World {
+    /// Fills `out[i]` with robot i's observation of the current tick. Draws sensor noise, so
+    /// call it exactly once per tick.
+    ///
+    /// From [`PARALLEL_OBSERVE_MIN`] robots on, the robots are split into contiguous ranges
+    /// observed on scoped threads (at most [`OBSERVE_THREADS`]): each observation reads only
+    /// shared state and its own robot's noise stream, so the result is the same bytes. In
+    /// process mode the robots sleep while the world observes, so the other cores are free
+    /// (a scoped thread costs ~50 us here; at 100 robots two threads take 226 us, one 290 us).
+    pub fn observe(&mut self, out: &mut [Observation]) {
+        let threads = if self.robots.len() >= PARALLEL_OBSERVE_MIN {
+            std::thread::available_parallelism()
+                .map(|p| p.get())
+                .unwrap_or(1)
+                .min(OBSERVE_THREADS)
+        } else {
+            1
+        };
+        self.observe_on(out, threads);
+    }
+
+    /// [`World::observe`] on exactly `threads` threads (at least one): the same bytes for
+    /// any count.
+    pub fn observe_on(&mut self, out: &mut [Observation], threads: usize) {
+        let start = self.stage_times.start();
+        let n = self.robots.len();
+        assert_eq!(out.len(), n, "one observation slot per robot");
+        let positions: Vec<(f64, f64)> = self.robots.iter().map(|r| (r.x, r.y)).collect();
+        let lidar = self.cfg.robots.lidar;
+        let rb_range = self.cfg.robots.range_bearing.range;
+        let radius = self.cfg.robots.radius;
+        // One neighbour query per robot serves the lidar (bodies within range + radius) and
+        // range-and-bearing. Cells about a third of that reach keep the candidates close to
+        // the disc (results do not depend on the cell size: candidates are filtered by
+        // distance and sorted).
+        let reach = (lidar.range + radius).max(rb_range);
+        let grid = Grid::build(&positions, (reach / 3.0).max(4.0 * radius));
+        let ctx = ObserveCtx {
+            robots: &self.robots,
+            map: &self.map,
+            grid: &grid,
+            inboxes: &self.inboxes,
+            tick: self.tick,
+            lidar,
+            rb_range,
+            radius,
+            reach,
+            noise: self.cfg.robots.noise,
+            goal: self.cfg.map.goal,
+            goal_sensor: self.cfg.robots.goal_sensor,
+        };
+        let rngs = &mut self.sensor_rng[..];
+        if threads <= 1 || n < 2 {
+            ctx.observe_range(0, out, rngs);
+        } else {
+            let chunk = n.div_ceil(threads);
+            std::thread::scope(|s| {
+                let mut parts = out
+                    .chunks_mut(chunk)
+                    .zip(rngs.chunks_mut(chunk))
+                    .enumerate();
+                let first = parts.next();
+                for (k, (outs, rngs)) in parts {
+                    let ctx = &ctx;
+                    s.spawn(move || ctx.observe_range(k * chunk, outs, rngs));
+                }
+                if let Some((_, (outs, rngs))) = first {
+                    ctx.observe_range(0, outs, rngs);
+                }
+            });
+        }
+        for r in &self.robots {
+            if r.state == RobotState::Active && r.lidar_on {
+                self.metrics.lidar_on_ticks += 1;
+            }
+        }
+        self.stage_times.stop(Stage::Sensing, start);
+    }
+
+    /// Notes every active robot that entered the goal radius for the first time.
+    pub(super) fn check_goal(&mut self) {
+        let g = self.cfg.map.goal;
+        for r in &mut self.robots {
+            if r.reached_tick.is_none()
+                && r.state == RobotState::Active
+                && (r.x - g.x).powi(2) + (r.y - g.y).powi(2) <= g.radius * g.radius
+            {
+                r.reached_tick = Some(self.tick);
+                self.metrics.reached_target += 1;
+                self.events.push(Event::Reached {
+                    tick: self.tick,
+                    robot: r.id,
+                });
+            }
+        }
+    }
+}
+
+/// Gaussian noise with standard deviation `sd`; draws nothing when `sd` is zero so a
+/// noiseless run consumes no randomness.
+fn gauss(rng: &mut Rng, sd: f64) -> f64 {
+    if sd > 0.0 {
+        Normal::new(0.0, sd).map(|d| d.sample(rng)).unwrap_or(0.0)
+    } else {
+        0.0
+    }
+}
+
+/// Robots from which [`World::observe`] splits the robots over threads (below, a thread costs
+/// more than it saves).
+pub const PARALLEL_OBSERVE_MIN: usize = 64;
+/// Most threads [`World::observe`] uses.
+pub const OBSERVE_THREADS: usize = 4;
+
+/// What one observation reads: shared by every robot of a tick.
+struct ObserveCtx<'a> {
+    robots: &'a [Robot],
+    map: &'a Map,
+    grid: &'a Grid,
+    inboxes: &'a [Vec<Frame>],
+    tick: u64,
+    lidar: swarmrt_scenario::LidarConfig,
+    rb_range: f64,
+    radius: f64,
+    reach: f64,
+    noise: swarmrt_scenario::NoiseConfig,
+    goal: swarmrt_scenario::Goal,
+    goal_sensor: swarmrt_scenario::GoalSensorConfig,
+}
+
+impl ObserveCtx<'_> {
+    /// Observes robots `first..first + out.len()`; `rngs` are their noise streams.
+    fn observe_range(&self, first: usize, out: &mut [Observation], rngs: &mut [Rng]) {
+        // Other robots within `reach`: (centre distance, id), nearest first.
+        let mut near: Vec<(f64, u32)> = Vec::new();
+        for (k, (o, rng)) in out.iter_mut().zip(rngs).enumerate() {
+            self.observe_one(first + k, o, rng, &mut near);
+        }
+    }
+
+    fn observe_one(
+        &self,
+        i: usize,
+        o: &mut Observation,
+        rng: &mut Rng,
+        near: &mut Vec<(f64, u32)>,
+    ) {
+        let (lidar, rb_range, radius, reach) = (self.lidar, self.rb_range, self.radius, self.reach);
+        let (noise, goal, goal_sensor) = (self.noise, self.goal, self.goal_sensor);
+        let r = &self.robots[i];
+        *o = Observation::empty(i as u32, self.tick);
+        o.state = r.state as u8;
+        o.reached = r.reached_tick.is_some() as u8;
+        o.x = r.x + gauss(rng, noise.pose);
+        o.y = r.y + gauss(rng, noise.pose);
+        o.theta = wrap_angle(r.theta + gauss(rng, noise.heading));
+        if r.state != RobotState::Active {
+            return;
+        }
+        near.clear();
+        self.grid.near((r.x, r.y), reach, |j| {
+            if j != i {
+                let q = &self.robots[j];
+                let d = ((q.x - r.x).powi(2) + (q.y - r.y).powi(2)).sqrt();
+                if d <= reach {
+                    near.push((d, j as u32));
+                }
+            }
+        });
+        near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        if r.lidar_on {
+            let rays = (lidar.rays as usize).min(MAX_LIDAR_RAYS);
+            // Other robots' bodies (in any state) are obstacles too. A ray stops looking once
+            // a body's nearest point lies beyond its best hit.
+            for k in 0..rays {
+                let angle = r.theta + lidar.ray_angle(k);
+                let dir = (angle.cos(), angle.sin());
+                let mut d = self
+                    .map
+                    .cast((r.x, r.y), angle, lidar.range)
+                    .unwrap_or(lidar.range);
+                for &(dc, j) in near.iter() {
+                    // Any hit on this body is at least dc - radius away (exact to far below
+                    // the margin), so neither it nor a farther body can lower d; d is a
+                    // minimum, so the order of the bodies does not change it.
+                    if dc - radius > d + LIDAR_SKIP_MARGIN {
+                        break;
+                    }
+                    let q = &self.robots[j as usize];
+                    if let Some(t) = ray_circle((r.x, r.y), dir, (q.x, q.y), radius) {
+                        d = d.min(t);
+                    }
+                }
+                let d = (d + gauss(rng, noise.lidar)).clamp(0.0, lidar.range);
+                o.lidar[k] = d;
+            }
+            o.lidar_len = rays as u16;
+        }
+        // Range-and-bearing: other robots with their emitter on, nearest first.
+        let mut seen = 0;
+        for &(d, j) in near.iter() {
+            if seen == MAX_NEIGHBOURS || d > rb_range {
+                break;
+            }
+            let q = &self.robots[j as usize];
+            if q.state != RobotState::Active {
+                continue;
+            }
+            o.neighbours[seen] = Neighbour {
+                id: j,
+                range: d,
+                bearing: wrap_angle((q.y - r.y).atan2(q.x - r.x) - r.theta),
+            };
+            seen += 1;
+        }
+        o.neighbours_len = seen as u16;
+        let gd = ((goal.x - r.x).powi(2) + (goal.y - r.y).powi(2)).sqrt();
+        let gb = wrap_angle((goal.y - r.y).atan2(goal.x - r.x) - r.theta);
+        if gd <= goal_sensor.range && gb.abs() <= goal_sensor.fov_deg.to_radians() / 2.0 {
+            o.goal_visible = 1;
+            o.goal_range = gd;
+            o.goal_bearing = gb;
+        }
+        let inbox = &self.inboxes[i];
+        for (slot, f) in inbox.iter().take(MAX_INBOX).enumerate() {
+            o.inbox[slot] = *f;
+        }
+        o.inbox_len = inbox.len().min(MAX_INBOX) as u16;
+    }
+}
+
+/// Metres a robot body's nearest point must lie beyond a ray's best hit before the ray stops
+/// testing bodies (rounding in `ray_circle` is ~1e-15 m at these distances).
+const LIDAR_SKIP_MARGIN: f64 = 1e-9;
+
+/// Distance along the ray from `o` in unit direction `dir` (cos, sin of its angle) to the
+/// circle (`c`, `r`), if it hits ahead.
+fn ray_circle(o: (f64, f64), dir: (f64, f64), c: (f64, f64), r: f64) -> Option<f64> {
+    let (dx, dy) = dir;
+    let (fx, fy) = (o.0 - c.0, o.1 - c.1);
+    let b = fx * dx + fy * dy;
+    let cc = fx * fx + fy * fy - r * r;
+    let disc = b * b - cc;
+    if disc < 0.0 {
+        return None;
+    }
+    let s = disc.sqrt();
+    let t = -b - s;
+    if t >= 0.0 {
+        Some(t)
+    } else if -b + s >= 0.0 {
+        Some(0.0)
+    } else {
+        None
+    }
+}
