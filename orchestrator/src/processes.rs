@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use crossbeam_channel::{Receiver, Sender};
-use swarmrt_protocol::control::{Control, Report};
+use swarmrt_protocol::control::{Control, WorldReport};
 use swarmrt_protocol::services::RunServices;
 use swarmrt_scenario::Config;
 
@@ -65,7 +65,7 @@ pub struct RobotProcess {
 }
 
 enum Msg {
-    Report(Report),
+    Report(WorldReport),
     WorldEof,
     Exited { pid: i32, how: String },
     Interrupt,
@@ -281,7 +281,7 @@ fn supervise(
         std::thread::spawn(move || {
             for line in BufReader::new(world_stdout).lines() {
                 let Ok(line) = line else { break };
-                match serde_json::from_str::<Report>(&line) {
+                match serde_json::from_str::<WorldReport>(&line) {
                     Ok(r) => {
                         if tx.send(Msg::Report(r)).is_err() {
                             return;
@@ -304,7 +304,7 @@ fn supervise(
     let mut listening = false;
     while !listening {
         match rx.recv()? {
-            Msg::Report(Report::Listening) => listening = true,
+            Msg::Report(WorldReport::Listening) => listening = true,
             Msg::Report(r) => tracing::debug!(?r, "early report"),
             Msg::WorldEof => {}
             Msg::Exited { pid, how } if pid == world_pid => {
@@ -380,9 +380,9 @@ fn supervise(
     let mut frozen: BTreeSet<i32> = BTreeSet::new();
     while !done {
         match rx.recv()? {
-            Msg::Report(Report::Ready { startup_ms }) => outcome.startup_ms = Some(startup_ms),
-            Msg::Report(Report::Tick { tick }) => progress(tick),
-            Msg::Report(Report::Kill { robot }) => {
+            Msg::Report(WorldReport::Ready { startup_ms }) => outcome.startup_ms = Some(startup_ms),
+            Msg::Report(WorldReport::Tick { tick }) => progress(tick),
+            Msg::Report(WorldReport::Kill { robot }) => {
                 // A scheduled kill: the world counts the robot dead already; the real signal
                 // exercises the crash path.
                 if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
@@ -391,19 +391,19 @@ fn supervise(
                     signal_all(&[pid], libc::SIGKILL);
                 }
             }
-            Msg::Report(Report::Freeze { robot }) => {
+            Msg::Report(WorldReport::Freeze { robot }) => {
                 if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
                     frozen.insert(pid);
                     signal_all(&[pid], libc::SIGSTOP);
                 }
             }
-            Msg::Report(Report::Thaw { robot }) => {
+            Msg::Report(WorldReport::Thaw { robot }) => {
                 if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
                     frozen.remove(&pid);
                     signal_all(&[pid], libc::SIGCONT);
                 }
             }
-            Msg::Report(Report::Restart { robot, incarnation }) => {
+            Msg::Report(WorldReport::Restart { robot, incarnation }) => {
                 // The world waits for the fresh process's hello before the robot rejoins, so
                 // how long this takes changes nothing in the records.
                 if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
@@ -431,7 +431,7 @@ fn supervise(
                     }
                 }
             }
-            Msg::Report(Report::Unresponsive { robot, waited_ms }) => {
+            Msg::Report(WorldReport::Unresponsive { robot, waited_ms }) => {
                 // Unscheduled: recorded as a death when the reaper reports the exit.
                 if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
                     tracing::warn!(robot, waited_ms, "robot unresponsive; killing it");
@@ -439,7 +439,7 @@ fn supervise(
                     signal_all(&[pid], libc::SIGKILL);
                 }
             }
-            Msg::Report(Report::Done {
+            Msg::Report(WorldReport::Done {
                 interrupted,
                 metrics,
             }) => {
@@ -447,7 +447,7 @@ fn supervise(
                 outcome.world_metrics = Some(metrics);
                 done = true;
             }
-            Msg::Report(Report::Listening) => {}
+            Msg::Report(WorldReport::Listening) => {}
             Msg::WorldEof => world_eof = true,
             Msg::Exited { pid, how } => {
                 if pid == world_pid {

@@ -28,7 +28,7 @@ pub enum Control {
 /// World -> orchestrator (stdout).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "report", rename_all = "snake_case")]
-pub enum Report {
+pub enum WorldReport {
     /// The services exist: robots can be started now.
     Listening,
     /// Every robot said hello (or died): tick 0 is about to be published.
@@ -83,7 +83,7 @@ pub enum Report {
     },
 }
 
-impl Report {
+impl WorldReport {
     /// One line, newline-terminated.
     pub fn to_line(&self) -> String {
         let mut s = serde_json::to_string(self).expect("reports always serialize");

@@ -12,7 +12,7 @@ use iceoryx2::identifiers::UniquePublisherId;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
-use swarmrt_protocol::control::{Control, Report};
+use swarmrt_protocol::control::{Control, WorldReport};
 use swarmrt_protocol::ipc::{self, IpcError};
 use swarmrt_protocol::services::{EVENT_CONTROL, RunServices};
 use swarmrt_protocol::{
@@ -62,7 +62,7 @@ fn wait(
     }
 }
 
-fn report(r: &Report) {
+fn report(r: &WorldReport) {
     let mut out = std::io::stdout().lock();
     // If the orchestrator is gone there is nobody to tell; the run still finishes its records.
     let _ = out.write_all(r.to_line().as_bytes());
@@ -134,17 +134,20 @@ pub fn run(
     }
     let node = ipc::node(run, &run.world_node_name())?;
     let services = ipc::create_services(&node, run, n, cfg.faults.restart.len())?;
-    let publisher = services
-        .observations
-        .publisher_builder()
-        .initial_max_slice_len(n)
-        .override_sample_preallocation(|_| ipc::OBSERVATION_SAMPLES)
-        .create()?;
-    let obs_notifier = services.observations_event.notifier_builder().create()?;
-    let subscriber = services.commands.subscriber_builder().create()?;
-    let listener = services.commands_event.listener_builder().create()?;
+    let ipc::WorldPorts {
+        publisher,
+        notifier: obs_notifier,
+        commands: subscriber,
+        listener,
+    } = ipc::WorldPorts::open(
+        &services.observations,
+        &services.observations_event,
+        &services.commands,
+        &services.commands_event,
+        n,
+    )?;
     let control = spawn_control_thread(run.clone());
-    report(&Report::Listening);
+    report(&WorldReport::Listening);
 
     let mut stats = ShellStats::default();
     let started = Instant::now();
@@ -186,7 +189,7 @@ pub fn run(
         }
         interrupted |= wait(&listener, &node, Duration::from_millis(500))?;
     }
-    report(&Report::Ready {
+    report(&WorldReport::Ready {
         startup_ms: started.elapsed().as_millis() as u64,
     });
 
@@ -210,15 +213,15 @@ pub fn run(
                 ProcessSignal::Kill(robot) => {
                     robot_of.retain(|_, r| *r != robot);
                     reborn.remove(&robot);
-                    report(&Report::Kill { robot });
+                    report(&WorldReport::Kill { robot });
                 }
-                ProcessSignal::Freeze(robot) => report(&Report::Freeze { robot }),
-                ProcessSignal::Thaw(robot) => report(&Report::Thaw { robot }),
+                ProcessSignal::Freeze(robot) => report(&WorldReport::Freeze { robot }),
+                ProcessSignal::Thaw(robot) => report(&WorldReport::Thaw { robot }),
                 ProcessSignal::Restart { robot, incarnation } => {
                     // Samples from the old process are no robot's answer any more.
                     robot_of.retain(|_, r| *r != robot);
                     reborn.insert(robot);
-                    report(&Report::Restart { robot, incarnation });
+                    report(&WorldReport::Restart { robot, incarnation });
                 }
                 ProcessSignal::Rejoin(robot) => {
                     rejoining.insert(robot);
@@ -343,7 +346,7 @@ pub fn run(
         });
         if world.tick() <= EARLY_REPORTS || last_progress.elapsed() >= PROGRESS_EVERY {
             last_progress = Instant::now();
-            report(&Report::Tick { tick: world.tick() });
+            report(&WorldReport::Tick { tick: world.tick() });
         }
     }
 
@@ -362,8 +365,8 @@ pub fn run(
     stats.timing = timer.summary();
     let mut metrics = serde_json::to_value(world.metrics())?;
     metrics["shell"] = serde_json::to_value(&stats)?;
-    report(&Report::Tick { tick: world.tick() });
-    report(&Report::Done {
+    report(&WorldReport::Tick { tick: world.tick() });
+    report(&WorldReport::Done {
         interrupted,
         metrics,
     });
@@ -422,7 +425,7 @@ fn give_up(world: &mut World, robot: u32, waited: Duration, why: &str) {
         "robot unresponsive ({why}); marking it dead"
     );
     world.mark_dead(robot, &format!("unresponsive: {why} for {waited_ms} ms"));
-    report(&Report::Unresponsive { robot, waited_ms });
+    report(&WorldReport::Unresponsive { robot, waited_ms });
 }
 
 /// Applies pending control messages; returns true when the run must stop.
