@@ -2,7 +2,102 @@
 //! every reader (metrics, the consensus checker, plots) reads back. Columns are found by name,
 //! so a reader never depends on their order.
 
+use serde::{Deserialize, Serialize};
 use serde_json::Value;
+
+/// Something worth a line in `events.jsonl`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "event", rename_all = "snake_case")]
+pub enum Event<N> {
+    /// A robot hit an obstacle, a wall or another robot and went down.
+    Collision {
+        /// Tick of the step in which it happened.
+        tick: u64,
+        /// The robot that went down.
+        robot: u32,
+        /// The other robot, when it was a robot.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        other: Option<u32>,
+    },
+    /// A robot entered the goal radius for the first time.
+    Reached {
+        /// Tick at which it was first inside.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+    },
+    /// A robot's process is gone; it stays where it is as an obstacle.
+    Died {
+        /// Tick from which it counts as dead.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+        /// Why (e.g. "process exited: signal 9").
+        reason: String,
+    },
+    /// A scheduled fault took effect or ended.
+    Fault {
+        /// Tick from which it holds.
+        tick: u64,
+        /// What happened.
+        fault: FaultKind,
+        /// The robot, for a process fault.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        robot: Option<u32>,
+        /// True for a fault drawn from `faults.kill_rate` / `faults.freeze_rate`.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        random: bool,
+    },
+    /// A robot's note about its own decisions (role, turn, consensus state).
+    Note {
+        /// Tick of the command that carried it.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+        /// What it said: the world writes it as the robots' vocabulary renders it
+        /// ([`crate::NoteJson`]); a reader takes it as JSON (`serde_json::Value`).
+        note: N,
+    },
+    /// A robot sent a command the world refused (logged once per robot and reason).
+    Rejected {
+        /// Tick of the refused command.
+        tick: u64,
+        /// The robot.
+        robot: u32,
+        /// What was wrong.
+        reason: String,
+    },
+}
+
+/// What a `fault` event says happened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FaultKind {
+    /// The robot's process is killed; the robot is dead from this tick.
+    Kill,
+    /// The robot's process is stopped; it stands still and silent.
+    Freeze,
+    /// A freeze ended: the robot answers again.
+    Thaw,
+    /// The robot's process is killed and a fresh one started after `down_ticks`.
+    Restart,
+    /// A restarted robot's fresh process answers again.
+    Rejoin,
+    /// A radio partition began.
+    PartitionStart,
+    /// A radio partition ended.
+    PartitionEnd,
+    /// Every radio went silent.
+    BlackoutStart,
+    /// The radios came back.
+    BlackoutEnd,
+    /// A kill whose target was dead, or a `"leader"` target with no leader.
+    KillSkipped,
+    /// A freeze whose target was not running, or had no leader.
+    FreezeSkipped,
+    /// A restart whose target was dead or already out, or had no leader.
+    RestartSkipped,
+}
 
 /// Header line of `trajectory.csv`.
 pub const TRAJECTORY_HEADER: &str = "tick,id,x,y,theta,v,omega,lidar,state\n";

@@ -2,6 +2,7 @@
 //! effect at exactly their tick boundary and hand the shell the signals to send.
 
 use swarmrt_agent::registry::VOCABULARY;
+use swarmrt_protocol::records::FaultKind;
 use swarmrt_protocol::{Command, Observation, RobotState};
 use swarmrt_scenario::Config;
 use swarmrt_world::{Event, ProcessSignal, World};
@@ -44,13 +45,13 @@ fn tick(w: &mut World, v: f64) -> Vec<Observation> {
     obs
 }
 
-fn faults(events: &[Event]) -> Vec<(u64, String, Option<u32>)> {
+fn faults(events: &[Event]) -> Vec<(u64, FaultKind, Option<u32>)> {
     events
         .iter()
         .filter_map(|e| match e {
             Event::Fault {
                 tick, fault, robot, ..
-            } => Some((*tick, fault.clone(), *robot)),
+            } => Some((*tick, *fault, *robot)),
             _ => None,
         })
         .collect()
@@ -90,7 +91,10 @@ fn a_frozen_robot_stands_still_from_its_first_tick_and_resumes_at_the_last() {
     assert_eq!(w.metrics().faults_injected, 1);
     assert_eq!(
         faults(&w.drain_events()),
-        vec![(5, "freeze".into(), Some(1)), (10, "thaw".into(), Some(1))]
+        vec![
+            (5, FaultKind::Freeze, Some(1)),
+            (10, FaultKind::Thaw, Some(1))
+        ]
     );
     // The other robot never stopped.
     assert!(w.robots()[0].x > 5.0 + 1.0);
@@ -170,15 +174,15 @@ fn a_kill_ends_a_freeze_and_a_dead_robot_is_neither_frozen_nor_restarted() {
         "no thaw for a dead robot, no restart or freeze of one"
     );
     assert_eq!(w.robots()[0].state, RobotState::Dead);
-    let f: Vec<String> = faults(&w.drain_events()).into_iter().map(|f| f.1).collect();
+    let f: Vec<FaultKind> = faults(&w.drain_events()).into_iter().map(|f| f.1).collect();
     assert_eq!(
         f,
         [
-            "freeze",
-            "freeze_skipped",
-            "kill",
-            "restart_skipped",
-            "freeze_skipped"
+            FaultKind::Freeze,
+            FaultKind::FreezeSkipped,
+            FaultKind::Kill,
+            FaultKind::RestartSkipped,
+            FaultKind::FreezeSkipped
         ]
     );
 }

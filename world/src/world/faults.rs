@@ -3,6 +3,7 @@
 
 use rand::Rng as _;
 use swarmrt_protocol::RobotState;
+use swarmrt_protocol::records::FaultKind;
 use swarmrt_scenario::faults::FaultTarget;
 
 use super::{Event, World};
@@ -44,10 +45,10 @@ impl World {
         std::mem::take(&mut self.signals)
     }
 
-    fn fault_event(&mut self, fault: &str, robot: Option<u32>, random: bool) {
+    fn fault_event(&mut self, fault: FaultKind, robot: Option<u32>, random: bool) {
         self.events.push(Event::Fault {
             tick: self.tick,
-            fault: fault.into(),
+            fault,
             robot,
             random,
         });
@@ -69,14 +70,14 @@ impl World {
 
     fn kill(&mut self, robot: u32, random: bool) {
         self.metrics.faults_injected += 1;
-        self.fault_event("kill", Some(robot), random);
+        self.fault_event(FaultKind::Kill, Some(robot), random);
         self.mark_dead(robot, "fault: kill");
         self.signals.push(ProcessSignal::Kill(robot));
     }
 
     fn freeze(&mut self, robot: u32, until: u64, random: bool) {
         self.metrics.faults_injected += 1;
-        self.fault_event("freeze", Some(robot), random);
+        self.fault_event(FaultKind::Freeze, Some(robot), random);
         let r = &mut self.robots[robot as usize];
         self.outages[robot as usize] = Some(Outage {
             until,
@@ -102,10 +103,10 @@ impl World {
             let was = r.state;
             r.state = o.resume;
             if was == RobotState::Frozen {
-                self.fault_event("thaw", Some(robot), false);
+                self.fault_event(FaultKind::Thaw, Some(robot), false);
                 self.signals.push(ProcessSignal::Thaw(robot));
             } else {
-                self.fault_event("rejoin", Some(robot), false);
+                self.fault_event(FaultKind::Rejoin, Some(robot), false);
                 self.signals.push(ProcessSignal::Rejoin(robot));
             }
         }
@@ -118,7 +119,7 @@ impl World {
                     .is_some_and(|r| r.state != RobotState::Dead)
             }) {
                 Some(robot) => self.kill(robot, false),
-                None => self.fault_event("kill_skipped", target, false),
+                None => self.fault_event(FaultKind::KillSkipped, target, false),
             }
         }
         for k in faults.restart.iter().filter(|k| k.tick == tick) {
@@ -131,7 +132,7 @@ impl World {
                 Some(robot) => {
                     self.metrics.faults_injected += 1;
                     self.metrics.restarts += 1;
-                    self.fault_event("restart", Some(robot), false);
+                    self.fault_event(FaultKind::Restart, Some(robot), false);
                     let i = robot as usize;
                     self.incarnations[i] += 1;
                     let r = &mut self.robots[i];
@@ -156,14 +157,14 @@ impl World {
                         incarnation: self.incarnations[i],
                     });
                 }
-                None => self.fault_event("restart_skipped", target, false),
+                None => self.fault_event(FaultKind::RestartSkipped, target, false),
             }
         }
         for f in faults.freeze.iter().filter(|f| f.from == tick) {
             let target = self.target(&f.robot);
             match target.filter(|&r| self.running(r)) {
                 Some(robot) => self.freeze(robot, f.to, false),
-                None => self.fault_event("freeze_skipped", target, false),
+                None => self.fault_event(FaultKind::FreezeSkipped, target, false),
             }
         }
         if faults.kill_rate > 0.0 || faults.freeze_rate > 0.0 {
@@ -185,15 +186,29 @@ impl World {
         let windows = faults
             .partition
             .iter()
-            .map(|p| ("partition", p.from, p.to))
-            .chain(faults.blackout.iter().map(|b| ("blackout", b.from, b.to)));
-        for (kind, from, to) in windows {
-            for (at, phase) in [(from, "start"), (to, "end")] {
+            .map(|p| {
+                (
+                    FaultKind::PartitionStart,
+                    FaultKind::PartitionEnd,
+                    p.from,
+                    p.to,
+                )
+            })
+            .chain(faults.blackout.iter().map(|b| {
+                (
+                    FaultKind::BlackoutStart,
+                    FaultKind::BlackoutEnd,
+                    b.from,
+                    b.to,
+                )
+            }));
+        for (start, end, from, to) in windows {
+            for (at, kind) in [(from, start), (to, end)] {
                 if at == tick {
-                    if phase == "start" {
+                    if kind == start {
                         self.metrics.faults_injected += 1;
                     }
-                    self.fault_event(&format!("{kind}_{phase}"), None, false);
+                    self.fault_event(kind, None, false);
                 }
             }
         }

@@ -19,6 +19,7 @@
 
 use serde::Serialize;
 use std::collections::BTreeSet;
+use swarmrt_protocol::records;
 use swarmrt_protocol::{Command, Frame, NoteJson, RobotState, Vocabulary};
 use swarmrt_scenario::Config;
 pub use swarmrt_scenario::wrap_angle;
@@ -63,71 +64,9 @@ pub struct Robot {
     pub reached_tick: Option<u64>,
 }
 
-/// Something worth a line in `events.jsonl`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "event", rename_all = "snake_case")]
-pub enum Event {
-    /// A robot hit an obstacle, a wall or another robot and went down.
-    Collision {
-        /// Tick of the step in which it happened.
-        tick: u64,
-        /// The robot that went down.
-        robot: u32,
-        /// The other robot, when it was a robot.
-        #[serde(skip_serializing_if = "Option::is_none")]
-        other: Option<u32>,
-    },
-    /// A robot entered the goal radius for the first time.
-    Reached {
-        /// Tick at which it was first inside.
-        tick: u64,
-        /// The robot.
-        robot: u32,
-    },
-    /// A robot's process is gone; it stays where it is as an obstacle.
-    Died {
-        /// Tick from which it counts as dead.
-        tick: u64,
-        /// The robot.
-        robot: u32,
-        /// Why (e.g. "process exited: signal 9").
-        reason: String,
-    },
-    /// A scheduled fault took effect or ended.
-    Fault {
-        /// Tick from which it holds.
-        tick: u64,
-        /// `kill`, `freeze`, `thaw`, `restart`, `rejoin`, `partition_start`, `partition_end`,
-        /// `blackout_start`, `blackout_end`, or `kill_skipped` / `freeze_skipped` /
-        /// `restart_skipped` when the target was dead, already out, or a `"leader"` target
-        /// had no leader.
-        fault: String,
-        /// The robot, for a process fault.
-        #[serde(skip_serializing_if = "Option::is_none")]
-        robot: Option<u32>,
-        /// True for a fault drawn from `faults.kill_rate` / `faults.freeze_rate`.
-        #[serde(skip_serializing_if = "std::ops::Not::not")]
-        random: bool,
-    },
-    /// A robot's note about its own decisions (role, turn, consensus state).
-    Note {
-        /// Tick of the command that carried it.
-        tick: u64,
-        /// The robot.
-        robot: u32,
-        /// What it said, as the robots' vocabulary renders it.
-        note: NoteJson,
-    },
-    /// A robot sent a command the world refused (logged once per robot and reason).
-    Rejected {
-        /// Tick of the refused command.
-        tick: u64,
-        /// The robot.
-        robot: u32,
-        /// What was wrong.
-        reason: String,
-    },
-}
+/// Something worth a line in `events.jsonl`, with notes as the robots' vocabulary renders
+/// them (the schema is [`swarmrt_protocol::records::Event`]).
+pub type Event = records::Event<NoteJson>;
 
 /// Scalar outcome of a run so far.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
