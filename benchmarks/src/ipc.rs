@@ -12,7 +12,6 @@ use serde::{Deserialize, Serialize};
 use super::child::{ChildMsg, ChildSpec, LossMode, Transport};
 use super::fanout::FanoutResult;
 use super::loss::{PubResult, SubResult};
-use super::plot::{Legend, Panel, Series, write_figure};
 use super::procs::{Children, Memory, memory};
 use super::stats::{Summary, summarize};
 use super::transports::{MIN_PAYLOAD, PATH_REPLY, PATH_REQUEST, PingResult, crossbeam_pair};
@@ -20,6 +19,7 @@ use super::{
     BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_ns, fmt_rate, machine,
     make_out_dir, progress, write_json,
 };
+use swarmrt_analysis::plot::bench::{Legend, Panel, Series, write_figure};
 use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
 
 /// The transport every row is compared with: iceoryx2 sleeping in a listener, as the

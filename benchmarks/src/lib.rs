@@ -20,7 +20,6 @@ pub mod fanout;
 pub mod floor;
 pub mod ipc;
 pub mod loss;
-pub mod plot;
 pub mod procs;
 pub mod stats;
 pub mod swarm;

@@ -19,12 +19,12 @@ use swarmrt_scenario::Config;
 
 use super::child::{ChildMsg, ChildSpec};
 use super::floor::{FloorResult, SAMPLE_TICK};
-use super::plot::{Legend, Panel, Series, write_figure};
 use super::procs::{Children, Memory, memory, my_children, open_fds};
 use super::{
     BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_rate, machine, make_out_dir,
     progress, write_json,
 };
+use swarmrt_analysis::plot::bench::{Legend, Panel, Series, write_figure};
 use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
 use swarmrt_orchestrator::{processes, run_dir};
 

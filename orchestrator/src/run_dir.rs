@@ -1,14 +1,12 @@
 //! The run directory (DESIGN section 7): naming, `config.toml`, `metrics.json` and the plots
 //! drawn from `trajectory.csv`.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use swarmrt_protocol::RobotState;
 use swarmrt_scenario::Config;
 
-use crate::plot::{RobotTrack, write_trajectory_plots};
+use swarmrt_analysis::plot::trajectory::write_trajectory_plots;
 
 /// `runs/<scenario>-s<seed>-<time>/`, with a numeric suffix if that exists already.
 pub fn default_dir(cfg: &Config) -> PathBuf {
@@ -73,45 +71,9 @@ pub fn write_metrics(dir: &Path, metrics: &serde_json::Value) -> anyhow::Result<
     Ok(())
 }
 
-/// Reads `trajectory.csv` back into one track per robot.
-pub fn read_tracks(dir: &Path) -> anyhow::Result<Vec<RobotTrack>> {
-    let text = std::fs::read_to_string(dir.join("trajectory.csv"))?;
-    let mut tracks: BTreeMap<u32, RobotTrack> = BTreeMap::new();
-    for line in text.lines().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        if f.len() != 9 {
-            continue;
-        }
-        let (Ok(id), Ok(x), Ok(y)) = (
-            f[1].parse::<u32>(),
-            f[2].parse::<f64>(),
-            f[3].parse::<f64>(),
-        ) else {
-            continue;
-        };
-        let state = match f[8] {
-            "down" => RobotState::Down,
-            "dead" => RobotState::Dead,
-            "frozen" => RobotState::Frozen,
-            "restarting" => RobotState::Restarting,
-            _ => RobotState::Active,
-        };
-        let t = tracks.entry(id).or_insert_with(|| RobotTrack {
-            id,
-            points: Vec::new(),
-            final_state: state,
-        });
-        if t.points.last() != Some(&(x, y)) {
-            t.points.push((x, y));
-        }
-        t.final_state = state;
-    }
-    Ok(tracks.into_values().collect())
-}
-
 /// Draws `trajectory.svg` and `trajectory.png` from the recorded trajectory.
 pub fn write_plots(dir: &Path, cfg: &Config) -> anyhow::Result<()> {
-    let tracks = read_tracks(dir)?;
+    let tracks = swarmrt_analysis::run_dir::read_tracks(dir)?;
     write_trajectory_plots(
         cfg,
         &tracks,

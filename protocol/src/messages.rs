@@ -98,6 +98,19 @@ impl RobotState {
         }
     }
 
+    /// The state named `name` in `trajectory.csv`, if it is one.
+    pub fn from_name(name: &str) -> Option<RobotState> {
+        [
+            RobotState::Active,
+            RobotState::Down,
+            RobotState::Dead,
+            RobotState::Frozen,
+            RobotState::Restarting,
+        ]
+        .into_iter()
+        .find(|s| s.as_str() == name)
+    }
+
     /// True when the robot's process must answer this tick's observation (a down robot's
     /// process still runs and answers; its command is ignored).
     pub fn expects_command(self) -> bool {

@@ -5,6 +5,8 @@
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+use crate::RobotState;
+
 /// Something worth a line in `events.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "event", rename_all = "snake_case")]
@@ -117,6 +119,8 @@ pub struct Row {
     pub theta: f64,
     /// Lidar on for this tick's observation.
     pub lidar: bool,
+    /// Its lifecycle state.
+    pub state: RobotState,
     /// Still active (not down, dead, frozen or restarting).
     pub active: bool,
 }
@@ -162,6 +166,7 @@ impl Columns {
         if f.len() != self.count {
             return None;
         }
+        let state = RobotState::from_name(f[self.state])?;
         Some(Row {
             tick: f[self.tick].parse().ok()?,
             id: f[self.id].parse().ok()?,
@@ -169,7 +174,8 @@ impl Columns {
             y: f[self.y].parse().ok()?,
             theta: f[self.theta].parse().ok()?,
             lidar: f[self.lidar] == "1",
-            active: f[self.state] == "active",
+            state,
+            active: state == RobotState::Active,
         })
     }
 }

@@ -121,14 +121,14 @@ pub fn run(
     }
     // Robots whose process is gone, by the schedule or by a crash.
     metrics["robots_lost"] = metrics.get("dead").cloned().unwrap_or(json!(0));
-    match crate::metrics::from_records(&cfg, &dir) {
+    match swarmrt_analysis::metrics::from_records(&cfg, &dir) {
         Ok(m) => merge(&mut metrics, m),
         Err(e) => tracing::warn!("could not compute metrics from the records: {e:#}"),
     }
     if cfg.consensus.is_some() {
         // From the record alone, so both modes give the same numbers.
         let events = std::fs::read_to_string(dir.join("events.jsonl")).unwrap_or_default();
-        metrics["consensus"] = crate::consensus_check::consensus_metrics(&events);
+        metrics["consensus"] = swarmrt_analysis::consensus_check::consensus_metrics(&events);
     }
     run_dir::write_metrics(&dir, &metrics)?;
     if let Err(e) = run_dir::write_plots(&dir, &cfg) {

@@ -18,8 +18,8 @@ use crate::run_dir;
 use crate::sweep::plan::{self, Plan, RunSpec};
 use crate::sweep::report::{self, SummaryHead};
 use crate::sweep::runner::{self, Event, Job, Outcome, PoolOptions};
-use crate::sweep::stats::Groups;
-use crate::sweep::table::{self, FAILED, Row, SEED, SweepCsv, Table};
+use swarmrt_analysis::stats::Groups;
+use swarmrt_analysis::sweep_csv::{self as table, FAILED, Row, SEED, SweepCsv, Table};
 
 /// Scalar keys `swarm run` adds around the world's own metrics (commands/run.rs); `shell.*`
 /// and `startup_ms` only in processes mode.
@@ -409,7 +409,11 @@ fn check_metrics(requested: &[String], cfg: &Config, existing: Option<&Table>) -
         return Ok(());
     }
     let mut known: BTreeSet<String> = RUN_METRICS.iter().map(|s| s.to_string()).collect();
-    known.extend(crate::metrics::names(cfg).iter().map(|s| s.to_string()));
+    known.extend(
+        swarmrt_analysis::metrics::names(cfg)
+            .iter()
+            .map(|s| s.to_string()),
+    );
     // The world's metrics have the same keys in every run.
     if let Ok(v) = serde_json::to_value(WorldMetrics::default()) {
         known.extend(table::flatten(&v).into_keys());

@@ -23,7 +23,7 @@ use swarmrt_scenario::Config;
 use swarmrt_world::Event;
 use swarmrt_world::radio::RadioMedium;
 
-use crate::consensus_check::Checker;
+use swarmrt_analysis::consensus_check::Checker;
 
 /// A minimal scenario the harnesses adjust (robot count, radio, consensus).
 pub fn base_config() -> Config {

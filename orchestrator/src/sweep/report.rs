@@ -4,10 +4,11 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::figure::{self, Figure, Point, Series};
 use super::plan::encode;
-use super::stats::Groups;
-use super::table::Table;
+use swarmrt_analysis::plot::sweep::{self as figure, Figure, Point, Series};
+use swarmrt_analysis::stats::Groups;
+use swarmrt_analysis::stats::fmt_num;
+use swarmrt_analysis::sweep_csv::Table;
 
 /// Metrics plotted when `--metric` is not given, each only if the runs report it.
 pub const DEFAULT_METRICS: [&str; 5] = [
@@ -192,24 +193,6 @@ pub fn write_plots(
         }
     }
     Ok(written)
-}
-
-/// A number in a table: integers as integers, else three significant digits.
-pub fn fmt_num(x: f64) -> String {
-    if !x.is_finite() {
-        return x.to_string();
-    }
-    if x.fract() == 0.0 && x.abs() < 1e15 {
-        return format!("{x:.0}");
-    }
-    let magnitude = x.abs().log10().floor() as i32;
-    let decimals = (2 - magnitude).clamp(0, 9) as usize;
-    let s = format!("{x:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
 }
 
 fn md_cell(s: &str) -> String {

@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use super::table::{FAILED, SEED, Table};
+use crate::sweep_csv::{FAILED, SEED, Table};
 
 /// Mean, spread and count of one metric in one combination.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -145,6 +145,24 @@ impl Groups {
     /// True when every value of key `i` is a number (a numeric plot axis).
     pub fn numeric(&self, i: usize) -> bool {
         self.values[i].iter().all(|v| v.parse::<f64>().is_ok())
+    }
+}
+
+/// A number in a table: integers as integers, else three significant digits.
+pub fn fmt_num(x: f64) -> String {
+    if !x.is_finite() {
+        return x.to_string();
+    }
+    if x.fract() == 0.0 && x.abs() < 1e15 {
+        return format!("{x:.0}");
+    }
+    let magnitude = x.abs().log10().floor() as i32;
+    let decimals = (2 - magnitude).clamp(0, 9) as usize;
+    let s = format!("{x:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
     }
 }
 

@@ -1,12 +1,11 @@
-//! Benchmark figures: panels of log-log line charts, written as SVG and PNG with the embedded
-//! font of the orchestrator's figures (no system font library needed).
+//! Benchmark figures: panels of log-log line charts, written as SVG and PNG (see [`super`]).
 
 use std::path::Path;
-use std::sync::OnceLock;
 
-use anyhow::{Context, anyhow};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+
+use super::{Drawing, TAB10, draw_err, write_svg_png};
 
 /// One line of a panel.
 #[derive(Debug, Clone)]
@@ -50,24 +49,14 @@ pub enum Legend {
     LowerRight,
 }
 
+/// tab10 without grey and olive: one colour per transport, the same in every panel.
 const PALETTE: [RGBColor; 8] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(23, 190, 207),
+    TAB10[0], TAB10[1], TAB10[2], TAB10[3], TAB10[4], TAB10[5], TAB10[6], TAB10[9],
 ];
 
 const PANEL_W: u32 = 640;
 const PANEL_H: u32 = 460;
 const TITLE_H: u32 = 44;
-
-fn draw_err<E: std::fmt::Debug>(what: &'static str) -> impl Fn(E) -> anyhow::Error {
-    move |e| anyhow!("drawing the {what}: {e:?}")
-}
 
 /// Axis range covering `values` on a log scale, with a little room.
 fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
@@ -136,7 +125,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> a
         .x_label_area_size(44)
         .y_label_area_size(64)
         .build_cartesian_2d((xr.0..xr.1).log_scale(), (yr.0..yr.1).log_scale())
-        .map_err(draw_err("axes"))?;
+        .map_err(draw_err("benchmark figure: axes"))?;
     chart
         .configure_mesh()
         .x_desc(p.x_desc.as_str())
@@ -148,7 +137,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> a
         .bold_line_style(BLACK.mix(0.08))
         .light_line_style(TRANSPARENT)
         .draw()
-        .map_err(draw_err("mesh"))?;
+        .map_err(draw_err("benchmark figure: mesh"))?;
     for (s, pts) in p.series.iter().zip(&usable) {
         if pts.is_empty() {
             continue;
@@ -161,7 +150,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> a
             chart.draw_series(LineSeries::new(pts.iter().copied(), style))
         };
         drawn
-            .map_err(draw_err("line"))?
+            .map_err(draw_err("benchmark figure: line"))?
             .label(s.name.as_str())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
         chart
@@ -169,7 +158,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> a
                 pts.iter()
                     .map(|&(x, y)| Circle::new((x, y), 3, colour.filled())),
             )
-            .map_err(draw_err("points"))?;
+            .map_err(draw_err("benchmark figure: points"))?;
     }
     chart
         .configure_series_labels()
@@ -183,7 +172,7 @@ fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel) -> a
             Legend::LowerRight => SeriesLabelPosition::LowerRight,
         })
         .draw()
-        .map_err(draw_err("legend"))?;
+        .map_err(draw_err("benchmark figure: legend"))?;
     Ok(())
 }
 
@@ -193,14 +182,15 @@ fn draw_figure<DB: DrawingBackend>(
     panels: &[Panel],
     cols: usize,
 ) -> anyhow::Result<()> {
-    root.fill(&WHITE).map_err(draw_err("background"))?;
+    root.fill(&WHITE)
+        .map_err(draw_err("benchmark figure: background"))?;
     let (head, body) = root.split_vertically(TITLE_H);
     head.draw(&Text::new(
         title.to_string(),
         (14, 12),
         ("sans-serif", 20.0).into_font(),
     ))
-    .map_err(draw_err("title"))?;
+    .map_err(draw_err("benchmark figure: title"))?;
     let rows = panels.len().div_ceil(cols);
     let cells = body.split_evenly((rows, cols));
     for (cell, p) in cells.iter().zip(panels) {
@@ -209,45 +199,35 @@ fn draw_figure<DB: DrawingBackend>(
     Ok(())
 }
 
-/// The orchestrator's embedded font (`orchestrator/assets/`), registered with plotters as
-/// "sans-serif" like `swarmrt_orchestrator::plot` does. That registration is crate-private
-/// there; once it is public (or moved to a shared crate), call it instead of this.
-static FONT_BYTES: &[u8] = include_bytes!("../../orchestrator/assets/DejaVuSans.ttf");
-
-/// Registers the embedded font once; later calls return the first outcome.
-fn ensure_font() -> anyhow::Result<()> {
-    static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let ok = *REGISTERED.get_or_init(|| {
-        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT_BYTES).is_ok()
-    });
-    if ok {
-        Ok(())
-    } else {
-        Err(anyhow!("the embedded plot font could not be loaded"))
-    }
-}
-
 /// Writes `<stem>.svg` and `<stem>.png` in `dir`: `panels` in a grid of up to two columns.
 pub fn write_figure(dir: &Path, stem: &str, title: &str, panels: &[Panel]) -> anyhow::Result<()> {
-    ensure_font()?;
-    let cols = panels.len().clamp(1, 2);
-    let rows = panels.len().div_ceil(cols).max(1);
-    let size = (PANEL_W * cols as u32, TITLE_H + PANEL_H * rows as u32);
-    let svg_path = dir.join(format!("{stem}.svg"));
-    let png_path = dir.join(format!("{stem}.png"));
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        draw_figure(&root, title, panels, cols)?;
-        root.present().map_err(draw_err("svg"))?;
+    let fig = BenchFigure {
+        title,
+        panels,
+        cols: panels.len().clamp(1, 2),
+    };
+    write_svg_png(
+        &fig,
+        &dir.join(format!("{stem}.svg")),
+        &dir.join(format!("{stem}.png")),
+    )
+}
+
+struct BenchFigure<'a> {
+    title: &'a str,
+    panels: &'a [Panel],
+    cols: usize,
+}
+
+impl Drawing for BenchFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        let rows = self.panels.len().div_ceil(self.cols).max(1);
+        (PANEL_W * self.cols as u32, TITLE_H + PANEL_H * rows as u32)
     }
-    std::fs::write(&svg_path, svg).with_context(|| format!("writing {}", svg_path.display()))?;
-    std::fs::File::create(&png_path).with_context(|| format!("writing {}", png_path.display()))?;
-    let root = BitMapBackend::new(&png_path, size).into_drawing_area();
-    draw_figure(&root, title, panels, cols)?;
-    root.present()
-        .map_err(|e| anyhow!("writing {}: {e}", png_path.display()))?;
-    Ok(())
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        draw_figure(root, self.title, self.panels, self.cols)
+    }
 }
 
 #[cfg(test)]

@@ -1,17 +1,16 @@
 //! The trajectory figure of a run: the map, every robot's path, start and end markers.
 //!
-//! Rendered twice with plotters, once as SVG and once as PNG. Text uses the embedded DejaVu
-//! Sans font (plotters' `ab_glyph` feature), so no system font library is needed.
+//! Rendered twice with plotters, once as SVG and once as PNG (see [`super`]).
 
 use std::path::Path;
-use std::sync::OnceLock;
 
-use anyhow::{Context, anyhow};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use swarmrt_protocol::RobotState;
 use swarmrt_scenario::Config;
+
+use super::{Drawing, TAB10, draw_err, write_svg_png};
 
 /// One robot's path for the plot.
 #[derive(Debug, Clone, PartialEq)]
@@ -23,9 +22,6 @@ pub struct RobotTrack {
     /// The robot's state at the end of the run.
     pub final_state: RobotState,
 }
-
-/// The embedded font, registered with plotters as "sans-serif".
-static FONT_BYTES: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 
 /// Length of the long side of the figure in pixels.
 const LONG_SIDE: u32 = 900;
@@ -49,32 +45,13 @@ const MIN_PLOT_H: u32 = 200;
 /// Qualitative palette for the first robots (tab10 without red, green and grey, which mean
 /// "down or dead", "goal" and "obstacle" here).
 const PALETTE: [RGBColor; 7] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(188, 189, 34),
-    RGBColor(23, 190, 207),
+    TAB10[0], TAB10[1], TAB10[4], TAB10[5], TAB10[6], TAB10[8], TAB10[9],
 ];
 const OBSTACLE_FILL: RGBColor = RGBColor(170, 170, 170);
 const OBSTACLE_EDGE: RGBColor = RGBColor(110, 110, 110);
 const GOAL: RGBColor = RGBColor(0, 150, 0);
 const CROSS: RGBColor = RGBColor(214, 39, 40);
 const LEGEND_INK: RGBColor = RGBColor(60, 60, 60);
-
-/// Registers the embedded font once; later calls return the first outcome.
-pub(crate) fn ensure_font() -> anyhow::Result<()> {
-    static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let ok = *REGISTERED.get_or_init(|| {
-        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT_BYTES).is_ok()
-    });
-    if ok {
-        Ok(())
-    } else {
-        Err(anyhow!("the embedded plot font could not be loaded"))
-    }
-}
 
 /// Colour of the `i`-th track: the palette first, then golden-angle hues.
 fn track_colour(i: usize) -> RGBColor {
@@ -347,12 +324,6 @@ fn circle_points(cx: f64, cy: f64, r: f64) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Turns a plotters drawing error into an `anyhow::Error` (their error types are not `'static`
-/// for every backend, so keep only the message).
-fn draw_err<E: std::fmt::Display>(what: &'static str) -> impl FnOnce(E) -> anyhow::Error {
-    move |e| anyhow!("drawing the trajectory plot ({what}): {e}")
-}
-
 /// Draws the header: the title on the first line and the marker legend below it.
 fn draw_header<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
@@ -366,7 +337,7 @@ fn draw_header<DB: DrawingBackend>(
     while size > 10.0 {
         let (tw, _) = area
             .estimate_text_size(title_text, &style)
-            .map_err(draw_err("title size"))?;
+            .map_err(draw_err("trajectory plot: title size"))?;
         if (tw as i32) < w - 20 {
             break;
         }
@@ -375,7 +346,7 @@ fn draw_header<DB: DrawingBackend>(
     }
     let style = style.pos(Pos::new(HPos::Center, VPos::Top));
     area.draw_text(title_text, &style, (w / 2, 8))
-        .map_err(draw_err("title"))?;
+        .map_err(draw_err("trajectory plot: title"))?;
 
     // Legend: rows of (marker, label) pairs, each row centred.
     let label_style = TextStyle::from(("sans-serif", LEGEND_FONT).into_font())
@@ -391,7 +362,7 @@ fn draw_header<DB: DrawingBackend>(
             let (mark, label) = LEGEND[i];
             draw_legend_mark(area, mark, x, y)?;
             area.draw_text(label, &label_style, (x + MARKER_W + MARKER_GAP, y))
-                .map_err(draw_err("legend label"))?;
+                .map_err(draw_err("trajectory plot: legend label"))?;
             x += widths[i] + ITEM_GAP;
         }
     }
@@ -434,7 +405,7 @@ fn draw_legend_mark<DB: DrawingBackend>(
                 .and_then(|()| area.draw(&Rectangle::new(corners, OBSTACLE_EDGE.stroke_width(1))))
         }
     };
-    res.map_err(draw_err("legend marker"))
+    res.map_err(draw_err("trajectory plot: legend marker"))
 }
 
 /// Draws the whole figure on `root`, whose size is `lay.width` x `lay.height`.
@@ -444,7 +415,8 @@ fn draw_figure<DB: DrawingBackend>(
     cfg: &Config,
     tracks: &[RobotTrack],
 ) -> anyhow::Result<()> {
-    root.fill(&WHITE).map_err(draw_err("background"))?;
+    root.fill(&WHITE)
+        .map_err(draw_err("trajectory plot: background"))?;
     let (header, body) = root.split_vertically(lay.header + TOP_GAP);
     draw_header(&header, lay, &title(cfg, tracks.len()))?;
 
@@ -459,7 +431,7 @@ fn draw_figure<DB: DrawingBackend>(
         .x_label_area_size(BOTTOM)
         .y_label_area_size(LEFT)
         .build_cartesian_2d(lay.x.0..lay.x.1, lay.y.0..lay.y.1)
-        .map_err(draw_err("axes"))?;
+        .map_err(draw_err("trajectory plot: axes"))?;
     chart
         .configure_mesh()
         .x_desc("x (m)")
@@ -474,7 +446,7 @@ fn draw_figure<DB: DrawingBackend>(
         .light_line_style(TRANSPARENT)
         .axis_style(BLACK.stroke_width(1))
         .draw()
-        .map_err(draw_err("mesh"))?;
+        .map_err(draw_err("trajectory plot: mesh"))?;
 
     let map = &cfg.map;
     let area = chart.plotting_area();
@@ -483,18 +455,18 @@ fn draw_figure<DB: DrawingBackend>(
     // Goal (under everything), obstacles, then the arena walls.
     let goal_ring = circle_points(map.goal.x, map.goal.y, map.goal.radius.abs());
     area.draw(&Polygon::new(goal_ring.clone(), GOAL.mix(0.12).filled()))
-        .map_err(draw_err("goal"))?;
+        .map_err(draw_err("trajectory plot: goal"))?;
     for c in &map.circles {
         let ring = circle_points(c.x, c.y, c.r.abs());
         area.draw(&Polygon::new(ring.clone(), OBSTACLE_FILL.filled()))
             .and_then(|()| area.draw(&PathElement::new(ring, OBSTACLE_EDGE.stroke_width(1))))
-            .map_err(draw_err("circle obstacle"))?;
+            .map_err(draw_err("trajectory plot: circle obstacle"))?;
     }
     for r in &map.rectangles {
         let corners = [(r.x_min, r.y_min), (r.x_max, r.y_max)];
         area.draw(&Rectangle::new(corners, OBSTACLE_FILL.filled()))
             .and_then(|()| area.draw(&Rectangle::new(corners, OBSTACLE_EDGE.stroke_width(1))))
-            .map_err(draw_err("rectangle obstacle"))?;
+            .map_err(draw_err("trajectory plot: rectangle obstacle"))?;
     }
     for p in &map.polygons {
         let pts: Vec<(f64, f64)> = p.points.iter().map(|q| (q[0], q[1])).collect();
@@ -505,15 +477,15 @@ fn draw_figure<DB: DrawingBackend>(
         ring.push(pts[0]);
         area.draw(&Polygon::new(pts, OBSTACLE_FILL.filled()))
             .and_then(|()| area.draw(&PathElement::new(ring, OBSTACLE_EDGE.stroke_width(1))))
-            .map_err(draw_err("polygon obstacle"))?;
+            .map_err(draw_err("trajectory plot: polygon obstacle"))?;
     }
     // A closed path rather than a rectangle: the SVG backend ignores a rectangle's stroke width.
     let [bx0, by0, bx1, by1] = map.bounds;
     let frame = vec![(bx0, by0), (bx1, by0), (bx1, by1), (bx0, by1), (bx0, by0)];
     area.draw(&PathElement::new(frame, BLACK.stroke_width(2)))
-        .map_err(draw_err("bounds"))?;
+        .map_err(draw_err("trajectory plot: bounds"))?;
     area.draw(&PathElement::new(goal_ring, GOAL.stroke_width(2)))
-        .map_err(draw_err("goal"))?;
+        .map_err(draw_err("trajectory plot: goal"))?;
 
     // Paths first, markers on top of all paths.
     let line_w = if tracks.len() <= 30 { 2 } else { 1 };
@@ -537,7 +509,7 @@ fn draw_figure<DB: DrawingBackend>(
             path,
             track_colour(i).stroke_width(line_w),
         ))
-        .map_err(draw_err("path"))?;
+        .map_err(draw_err("trajectory plot: path"))?;
     }
     let body_r = px(cfg.robots.radius, 3.0, 30.0).round() as i32;
     let dot_r = px(cfg.robots.radius, 2.5, 30.0).round() as i32;
@@ -548,7 +520,7 @@ fn draw_figure<DB: DrawingBackend>(
         };
         let colour = track_colour(i);
         area.draw(&Circle::new(start, body_r, colour.stroke_width(line_w)))
-            .map_err(draw_err("start marker"))?;
+            .map_err(draw_err("trajectory plot: start marker"))?;
         let end_marker = match tracks[i].final_state {
             RobotState::Active | RobotState::Frozen | RobotState::Restarting => {
                 area.draw(&Circle::new(end, dot_r, colour.filled()))
@@ -562,7 +534,7 @@ fn draw_figure<DB: DrawingBackend>(
                 )
             }
         };
-        end_marker.map_err(draw_err("end marker"))?;
+        end_marker.map_err(draw_err("trajectory plot: end marker"))?;
     }
     Ok(())
 }
@@ -574,27 +546,29 @@ pub fn write_trajectory_plots(
     svg_path: &Path,
     png_path: &Path,
 ) -> anyhow::Result<()> {
-    ensure_font()?;
-    let lay = layout(cfg, tracks);
-    let size = (lay.width, lay.height);
+    super::ensure_font()?;
+    let fig = TrajectoryFigure {
+        lay: layout(cfg, tracks),
+        cfg,
+        tracks,
+    };
+    write_svg_png(&fig, svg_path, png_path)
+}
 
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        draw_figure(&root, &lay, cfg, tracks)?;
-        root.present().map_err(draw_err("svg"))?;
+struct TrajectoryFigure<'a> {
+    lay: Layout,
+    cfg: &'a Config,
+    tracks: &'a [RobotTrack],
+}
+
+impl Drawing for TrajectoryFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        (self.lay.width, self.lay.height)
     }
-    std::fs::write(svg_path, svg)
-        .with_context(|| format!("writing trajectory plot {}", svg_path.display()))?;
 
-    // Create the file first so an unwritable path gets a clear I/O error.
-    std::fs::File::create(png_path)
-        .with_context(|| format!("writing trajectory plot {}", png_path.display()))?;
-    let root = BitMapBackend::new(png_path, size).into_drawing_area();
-    draw_figure(&root, &lay, cfg, tracks)?;
-    root.present()
-        .map_err(|e| anyhow!("writing trajectory plot {}: {e}", png_path.display()))?;
-    Ok(())
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        draw_figure(root, &self.lay, self.cfg, self.tracks)
+    }
 }
 
 #[cfg(test)]
@@ -736,7 +710,7 @@ radius = 0.2
     #[test]
     fn plot_layout_keeps_equal_scale() {
         let cfg = config([0.0, 0.0, 20.0, 10.0]);
-        ensure_font().unwrap();
+        crate::plot::ensure_font().unwrap();
         let lay = layout(&cfg, &three_tracks(&cfg));
         let sx = f64::from(lay.plot_w) / (lay.x.1 - lay.x.0);
         let sy = f64::from(lay.plot_h) / (lay.y.1 - lay.y.0);

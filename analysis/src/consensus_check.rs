@@ -25,6 +25,7 @@ use std::collections::BTreeMap;
 
 use serde_json::{Value, json};
 use swarmrt_agent::consensus::{ConsensusNote, Decision, Role, SentCounts};
+use swarmrt_protocol::records::{Event, FaultKind};
 
 /// A broken property.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -540,20 +541,27 @@ impl Checker {
                 c.end_tick(prev);
             }
             tick = Some(tick.map_or(t, |p| p.max(t)));
-            let robot = v["robot"].as_u64().unwrap_or(0) as u32;
-            match v["event"].as_str() {
-                Some("note") => {
+            // An event kind this build does not know is none of the checker's business.
+            let Ok(event) = serde_json::from_value::<Event<Value>>(v) else {
+                continue;
+            };
+            match event {
+                Event::Note { robot, note, .. } => {
                     // Consensus notes are recorded as `{"consensus": {...}}`.
-                    if let Some(cn) = v["note"].get("consensus") {
+                    if let Some(cn) = note.get("consensus") {
                         let cn: ConsensusNote = serde_json::from_value(cn.clone())
                             .map_err(|e| format!("events.jsonl line {}: note: {e}", n + 1))?;
                         c.note(t, robot, &cn);
                     }
                 }
-                Some("died") => c.died(t, robot),
+                Event::Died { robot, .. } => c.died(t, robot),
                 // A restarted robot's old process is gone from that tick; its fresh process
                 // announces itself with a Boot note when it rejoins.
-                Some("fault") if v["fault"] == "restart" => c.died(t, robot),
+                Event::Fault {
+                    fault: FaultKind::Restart,
+                    robot: Some(robot),
+                    ..
+                } => c.died(t, robot),
                 _ => {}
             }
         }

@@ -3,13 +3,12 @@
 
 use std::path::Path;
 
-use anyhow::{Context, anyhow};
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 use plotters::prelude::*;
 
-use super::report::fmt_num;
-use crate::plot::ensure_font;
+use super::{Drawing, TAB10, draw_err, write_svg_png};
+use crate::stats::fmt_num;
 
 /// One x position of a line.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -57,26 +56,8 @@ const SIZE: (u32, u32) = (960, 560);
 /// Width of the legend column on the right.
 const LEGEND_W: u32 = 230;
 
-/// tab10, a palette readers know.
-const PALETTE: [RGBColor; 10] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-    RGBColor(188, 189, 34),
-    RGBColor(23, 190, 207),
-];
-
 fn colour(i: usize) -> RGBColor {
-    PALETTE[i % PALETTE.len()]
-}
-
-fn draw_err<E: std::fmt::Debug>(what: &'static str) -> impl Fn(E) -> anyhow::Error {
-    move |e| anyhow!("drawing the sweep plot ({what}): {e:?}")
+    TAB10[i % TAB10.len()]
 }
 
 /// Axis range covering `lo..hi` with a margin; a flat range gets room around it, and data
@@ -125,7 +106,8 @@ impl Ranged for SweptAxis {
 }
 
 fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, fig: &Figure) -> anyhow::Result<()> {
-    root.fill(&WHITE).map_err(draw_err("background"))?;
+    root.fill(&WHITE)
+        .map_err(draw_err("sweep plot: background"))?;
     let (plot, legend) = root.split_horizontally(SIZE.0 - LEGEND_W);
 
     let xs: Vec<f64> = fig.x_ticks.iter().map(|t| t.0).collect();
@@ -168,7 +150,7 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, fig: &Figure) -> anyh
             },
             y0..y1,
         )
-        .map_err(draw_err("axes"))?;
+        .map_err(draw_err("sweep plot: axes"))?;
     chart
         .configure_mesh()
         .x_desc(fig.x_label.as_str())
@@ -182,7 +164,7 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, fig: &Figure) -> anyh
         .light_line_style(TRANSPARENT)
         .axis_style(BLACK.stroke_width(1))
         .draw()
-        .map_err(draw_err("mesh"))?;
+        .map_err(draw_err("sweep plot: mesh"))?;
 
     for (i, s) in fig.series.iter().enumerate() {
         let c = colour(i);
@@ -191,7 +173,7 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, fig: &Figure) -> anyh
             band.extend(s.points.iter().rev().map(|p| (p.x, p.min)));
             chart
                 .draw_series(std::iter::once(Polygon::new(band, c.mix(0.15).filled())))
-                .map_err(draw_err("band"))?;
+                .map_err(draw_err("sweep plot: band"))?;
         } else {
             // A single x: whiskers instead of a band.
             chart
@@ -200,21 +182,21 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, fig: &Figure) -> anyh
                         PathElement::new(vec![(p.x, p.min), (p.x, p.max)], c.stroke_width(2))
                     }),
                 )
-                .map_err(draw_err("whisker"))?;
+                .map_err(draw_err("sweep plot: whisker"))?;
         }
         chart
             .draw_series(LineSeries::new(
                 s.points.iter().map(|p| (p.x, p.mean)),
                 c.stroke_width(2),
             ))
-            .map_err(draw_err("line"))?;
+            .map_err(draw_err("sweep plot: line"))?;
         chart
             .draw_series(
                 s.points
                     .iter()
                     .map(|p| Circle::new((p.x, p.mean), 4, c.filled())),
             )
-            .map_err(draw_err("markers"))?;
+            .map_err(draw_err("sweep plot: markers"))?;
     }
     draw_legend(&legend, fig)
 }
@@ -230,7 +212,7 @@ fn draw_legend<DB: DrawingBackend>(
     let mut y = 60;
     if !fig.legend_title.is_empty() {
         area.draw_text(&fig.legend_title, &head, (8, y))
-            .map_err(draw_err("legend"))?;
+            .map_err(draw_err("sweep plot: legend"))?;
         y += 26;
     }
     for (i, s) in fig.series.iter().enumerate() {
@@ -247,13 +229,13 @@ fn draw_legend<DB: DrawingBackend>(
         })
         .and_then(|()| area.draw(&Circle::new((22, y + 7), 4, c.filled())))
         .and_then(|()| area.draw_text(&s.label, &text, (44, y)))
-        .map_err(draw_err("legend"))?;
+        .map_err(draw_err("sweep plot: legend"))?;
         y += 24;
     }
     y += 12;
     for line in &fig.note {
         area.draw_text(line, &text, (8, y))
-            .map_err(draw_err("legend"))?;
+            .map_err(draw_err("sweep plot: legend"))?;
         y += 20;
     }
     Ok(())
@@ -261,21 +243,17 @@ fn draw_legend<DB: DrawingBackend>(
 
 /// Writes the figure as SVG and PNG.
 pub fn write(fig: &Figure, svg_path: &Path, png_path: &Path) -> anyhow::Result<()> {
-    ensure_font()?;
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        draw(&root, fig)?;
-        root.present().map_err(draw_err("svg"))?;
+    write_svg_png(fig, svg_path, png_path)
+}
+
+impl Drawing for Figure {
+    fn size(&self) -> (u32, u32) {
+        SIZE
     }
-    std::fs::write(svg_path, svg).with_context(|| format!("writing {}", svg_path.display()))?;
-    // Create the file first so an unwritable path gets a clear I/O error.
-    std::fs::File::create(png_path).with_context(|| format!("writing {}", png_path.display()))?;
-    let root = BitMapBackend::new(png_path, SIZE).into_drawing_area();
-    draw(&root, fig)?;
-    root.present()
-        .map_err(|e| anyhow!("writing {}: {e}", png_path.display()))?;
-    Ok(())
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        draw(root, self)
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,18 @@
+//! Reading what runs wrote: nothing here runs a swarm.
+//!
+//! - [`run_dir`]: a run directory's `trajectory.csv` and `events.jsonl` as typed records (the
+//!   schema is `swarmrt_protocol::records`).
+//! - [`metrics`]: the metrics registry: what every run gets from its records, plus each
+//!   behaviour's own (found through `swarmrt_agent::registry`).
+//! - [`consensus_check`]: Raft's safety properties and the consensus metrics, from the notes.
+//! - [`sweep_csv`]: `sweep.csv`, one row per finished run of a sweep.
+//! - [`stats`]: a sweep's rows grouped by combination, with their statistics.
+//! - [`plot`]: every figure: a run's trajectories, a sweep's metrics, the benchmarks'.
+#![warn(missing_docs)]
+
+pub mod consensus_check;
+pub mod metrics;
+pub mod plot;
+pub mod run_dir;
+pub mod stats;
+pub mod sweep_csv;

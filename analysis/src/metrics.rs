@@ -1,0 +1,56 @@
+//! The metrics registry: what a run's records (`trajectory.csv`, `events.jsonl`) and config
+//! give after the run. Both modes write identical records, so both get identical metrics.
+//! Metrics every run gets are here; a behaviour's own live in its folder
+//! (`agent/src/behaviours/<name>/`) and are found through the agent's registry.
+
+use std::path::Path;
+
+use serde_json::{Value, json};
+use swarmrt_protocol::records::Records;
+use swarmrt_scenario::Config;
+
+/// Names of the metrics [`from_records`] adds for this scenario (for checking `--metric`).
+pub fn names(cfg: &Config) -> Vec<&'static str> {
+    let mut names = vec!["steps_to_target", "energy_saving", "robots_lost"];
+    if let Some(p) = swarmrt_agent::registry::plugin(&cfg.behaviour.kind) {
+        names.extend(p.metric_names());
+    }
+    names
+}
+
+/// Metrics every run gets, plus the behaviour's own, as a JSON object to merge into
+/// metrics.json.
+pub fn from_records(cfg: &Config, dir: &Path) -> anyhow::Result<Value> {
+    let rec = crate::run_dir::read(dir)?;
+    let mut out = json!({
+        "steps_to_target": steps_to_target(&rec),
+        "energy_saving": energy_saving(&rec),
+    });
+    if let Some(p) = swarmrt_agent::registry::plugin(&cfg.behaviour.kind) {
+        let own = p
+            .metrics(cfg, &rec)
+            .map_err(|(key, message)| anyhow::anyhow!("key `{key}`: {message}"))?;
+        for (k, v) in own {
+            out[k] = v;
+        }
+    }
+    Ok(out)
+}
+
+/// Tick at which the last robot that reached the target got there; `None` if none did.
+pub fn steps_to_target(rec: &Records) -> Option<u64> {
+    rec.events_of("reached")
+        .filter_map(|e| e["tick"].as_u64())
+        .max()
+}
+
+/// Share of lidar energy saved against every active robot having its lidar on every tick
+/// (seed 000, Fig. 7). Tick 0 is left out: every lidar starts on.
+pub fn energy_saving(rec: &Records) -> Option<f64> {
+    let (mut on, mut all) = (0u64, 0u64);
+    for row in rec.ticks.iter().skip(1).flatten().filter(|r| r.active) {
+        all += 1;
+        on += row.lidar as u64;
+    }
+    (all > 0).then(|| 1.0 - on as f64 / all as f64)
+}
