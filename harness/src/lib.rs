@@ -1,11 +1,13 @@
 //! The world and robot cores called directly, in one process, in exactly the order the
 //! process shells call them (after raft-rs's `harness/`): one lock-step loop for every
-//! in-process caller (`swarm run --in-process`, sweeps, benchmarks), a Raft test network, and
-//! the full config loader the callers share.
+//! in-process caller (`swarm run --in-process`, sweeps, benchmarks), the Raft and radio test
+//! networks, the fuzz drivers, and the full config loader the callers share.
 //!
 //! - [`lockstep`]: the tick loop (faults' restarts, observe, every running robot's step, the
 //!   world's step).
 //! - [`raft_net`]: Raft cores alone in an in-memory network with cut links.
+//! - [`fuzz`]: real agents over the world's radio medium with crashes, restarts and
+//!   partitions, checked every tick (`swarm fuzz`).
 //! - [`load_config`]: a scenario as a run needs it.
 //!
 //! ```
@@ -30,6 +32,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod fuzz;
 pub mod lockstep;
 pub mod raft_net;
 

@@ -7,7 +7,6 @@ pub mod cli;
 pub mod commands;
 pub mod config;
 pub mod error;
-pub mod fuzz;
 pub mod processes;
 pub mod run_dir;
 pub mod sweep;

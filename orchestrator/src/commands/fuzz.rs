@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::cli::{ConsensusArgs, ElectionArgs, FuzzCmd, QuadrantArgs};
 use crate::error::{SwarmError, SwarmResult};
-use crate::fuzz::{consensus, election, quadrant};
+use swarmrt_harness::fuzz::{consensus, election, quadrant};
 
 fn progress(total: u64) -> ProgressBar {
     let pb = ProgressBar::with_draw_target(
