@@ -1,5 +1,0 @@
-//! `swarm-agent`: one robot process (started by `swarm run`). Lives in this package so that
-//! building `swarm` always builds it beside it.
-fn main() -> std::process::ExitCode {
-    swarmrt_agent::cli::main()
-}
