@@ -382,22 +382,26 @@ fn same_seed_same_run_with_noise_and_loss() {
                 obs.iter()
                     .map(|o| (o.x.to_bits(), o.lidar[0].to_bits(), o.inbox_len)),
             );
-            let cmds: Vec<_> = (0..4)
-                .map(|i| {
-                    let mut c = Command::act(i, w.tick());
-                    c.v = 0.3;
-                    c.omega = 0.5;
-                    c.lidar_on = 1;
-                    c.push_frame(BROADCAST, &BEACON).unwrap();
-                    Some(c)
-                })
-                .collect();
-            w.step(&cmds);
+            w.step(&turning_beacons(4, w.tick()));
         }
         trace
     };
     assert_eq!(run(1), run(1));
     assert_ne!(run(1), run(2));
+}
+
+/// Every robot drives a slow left curve with its lidar on and broadcasts a beacon.
+fn turning_beacons(robots: u32, tick: u64) -> Vec<Option<Command>> {
+    (0..robots)
+        .map(|i| {
+            let mut c = Command::act(i, tick);
+            c.v = 0.3;
+            c.omega = 0.5;
+            c.lidar_on = 1;
+            c.push_frame(BROADCAST, &BEACON).unwrap();
+            Some(c)
+        })
+        .collect()
 }
 
 #[test]
@@ -416,17 +420,7 @@ fn stage_timing_is_off_by_default_and_changes_nothing() {
         for _ in 0..20 {
             let mut obs = vec![Observation::empty(0, 0); 4];
             w.observe(&mut obs);
-            let cmds: Vec<_> = (0..4)
-                .map(|i| {
-                    let mut c = Command::act(i, w.tick());
-                    c.v = 0.3;
-                    c.omega = 0.5;
-                    c.lidar_on = 1;
-                    c.push_frame(BROADCAST, &BEACON).unwrap();
-                    Some(c)
-                })
-                .collect();
-            w.step(&cmds);
+            w.step(&turning_beacons(4, w.tick()));
             events.extend(w.drain_events());
         }
         let times = w.take_stage_times();
