@@ -28,13 +28,19 @@ pub fn main() -> std::process::ExitCode {
     swarmrt_scenario::process::init_logging();
     let span = tracing::info_span!("robot", agent_id = args.robot);
     let _enter = span.enter();
-    let (run, cfg) = match swarmrt_scenario::process::load_run(&args.run_id, &args.config) {
+    let (run, mut cfg) = match swarmrt_scenario::process::load_run(&args.run_id, &args.config) {
         Ok(x) => x,
         Err(e) => {
             tracing::error!("{e}");
             return std::process::ExitCode::from(2);
         }
     };
+    // The orchestrator resolved `[behaviour]` already; a hand-edited config is refused here
+    // with its key rather than found out by a panic in the first tick.
+    if let Err(e) = crate::registry::resolve(&mut cfg, &args.config.display().to_string()) {
+        tracing::error!("{e}");
+        return std::process::ExitCode::from(2);
+    }
     if args.robot >= cfg.robots.count {
         tracing::error!(robots = cfg.robots.count, "robot id out of range");
         return std::process::ExitCode::from(2);
