@@ -21,7 +21,7 @@ pub use crate::behaviours::{BEHAVIOURS, Note, RadioMsg};
 use crate::consensus::{ConsensusNote, Decision};
 use crate::inbox::Heard;
 
-/// Connects a behaviour to its variants of the envelopes (written by `registry!`).
+/// Connects a behaviour to its variants of the envelopes (written by `behaviours!`).
 pub trait Enveloped: Behaviour {
     /// `msg` inside the radio envelope.
     fn wrap_msg(msg: Self::Msg) -> RadioMsg;
