@@ -4,7 +4,7 @@
 use clap::Parser;
 use swarmrt_benchmarks::cli::{BenchCmd, Cli};
 use swarmrt_benchmarks::{child, interruptible, ipc, swarm};
-use swarmrt_orchestrator::error::SwarmError;
+use swarmrt_orchestrator::error::exit;
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
@@ -32,20 +32,4 @@ fn main() -> std::process::ExitCode {
         BenchCmd::Child(args) => child::main(&args.spec),
     });
     exit(result)
-}
-
-/// Exit codes of DESIGN section 6: 0 ok, 2 a user error (one line), 1 an internal failure,
-/// 130 after Ctrl-C.
-fn exit(result: Result<(), SwarmError>) -> std::process::ExitCode {
-    match result {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            match &e {
-                SwarmError::User(msg) => eprintln!("error: {msg}"),
-                SwarmError::Internal(err) => eprintln!("error: {err:#}"),
-                SwarmError::Interrupted(msg) => eprintln!("{msg}"),
-            }
-            std::process::ExitCode::from(e.exit_code())
-        }
-    }
 }

@@ -42,3 +42,19 @@ impl From<std::io::Error> for SwarmError {
 
 /// Result of a `swarm` command.
 pub type SwarmResult<T> = Result<T, SwarmError>;
+
+/// Prints a failure (one line for a user error) and turns it into the exit code DESIGN
+/// section 6 promises; shared by `swarm` and `swarm-bench`.
+pub fn exit(result: SwarmResult<()>) -> std::process::ExitCode {
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            match &e {
+                SwarmError::User(msg) => eprintln!("error: {msg}"),
+                SwarmError::Internal(err) => eprintln!("error: {err:#}"),
+                SwarmError::Interrupted(msg) => eprintln!("{msg}"),
+            }
+            std::process::ExitCode::from(e.exit_code())
+        }
+    }
+}

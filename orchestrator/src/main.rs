@@ -3,7 +3,7 @@
 use clap::Parser;
 use swarmrt_orchestrator::cli::{Cli, Cmd};
 use swarmrt_orchestrator::commands;
-use swarmrt_orchestrator::error::SwarmError;
+use swarmrt_orchestrator::error::exit;
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
@@ -29,19 +29,4 @@ fn main() -> std::process::ExitCode {
         Cmd::Fuzz(cmd) => commands::fuzz::fuzz(cmd),
     };
     exit(result)
-}
-
-/// Prints a failure and turns it into the exit code DESIGN section 6 promises.
-fn exit(result: Result<(), SwarmError>) -> std::process::ExitCode {
-    match result {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            match &e {
-                SwarmError::User(msg) => eprintln!("error: {msg}"),
-                SwarmError::Internal(err) => eprintln!("error: {err:#}"),
-                SwarmError::Interrupted(msg) => eprintln!("{msg}"),
-            }
-            std::process::ExitCode::from(e.exit_code())
-        }
-    }
 }
