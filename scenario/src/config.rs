@@ -163,33 +163,69 @@ pub struct RobotsConfig {
 }
 
 /// Start layout: derived from the count, so changing `robots.count` alone stays valid.
+/// Either one grid around `(x, y)` or, with `groups`, one grid per group (robots split by id
+/// into contiguous blocks, as flocks or teams that start apart).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StartLayout {
-    /// Centre of the grid of start positions, x.
-    pub x: f64,
-    /// Centre of the grid, y.
-    pub y: f64,
+    /// Centre of the grid of start positions, x (not with `groups`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub x: Option<f64>,
+    /// Centre of the grid, y (not with `groups`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub y: Option<f64>,
     /// Distance between neighbouring start positions.
     pub spacing: f64,
     /// Initial heading of every robot, degrees.
     #[serde(default)]
     pub heading_deg: f64,
+    /// Start groups: robot `i` of `n` belongs to group `i * groups.len() / n`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub groups: Vec<StartGroup>,
+    /// Each robot starts up to this far (metres, per axis, uniform from the seed) off its grid
+    /// point; at most `(spacing - 2 * radius) / 2`, so robots never start overlapping.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub jitter: f64,
+    /// Each robot's heading is off by up to this many degrees (uniform from the seed).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub heading_jitter_deg: f64,
+}
+
+/// One start group: the centre of its grid and its robots' heading.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartGroup {
+    /// Centre x in metres.
+    pub x: f64,
+    /// Centre y in metres.
+    pub y: f64,
+    /// Heading of its robots in degrees (default: `robots.start.heading_deg`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub heading_deg: Option<f64>,
 }
 
 impl Default for StartLayout {
     fn default() -> Self {
         StartLayout {
-            x: 2.0,
-            y: 2.0,
+            x: Some(2.0),
+            y: Some(2.0),
             spacing: 0.8,
             heading_deg: 0.0,
+            groups: Vec::new(),
+            jitter: 0.0,
+            heading_jitter_deg: 0.0,
         }
     }
 }
 
-/// The lidar: `rays` beams evenly over `fov_deg`, centred on the heading.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+/// The lidar: `rays` beams evenly over `fov_deg`, centred on the heading, or at the given
+/// `angles_deg` (a ring of short-range proximity sensors such as the e-puck's eight IR sensors).
+/// Ranges are measured from the robot's centre.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct LidarConfig {
     /// Number of rays (1..=64).
@@ -198,6 +234,10 @@ pub struct LidarConfig {
     pub fov_deg: f64,
     /// Maximum range in metres.
     pub range: f64,
+    /// Explicit ray angles in degrees relative to the heading, counter-clockwise positive
+    /// (ray k at `angles_deg[k]`); `rays` must equal their number and `fov_deg` is unused.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub angles_deg: Vec<f64>,
 }
 
 impl Default for LidarConfig {
@@ -206,14 +246,19 @@ impl Default for LidarConfig {
             rays: 16,
             fov_deg: 180.0,
             range: 3.0,
+            angles_deg: Vec::new(),
         }
     }
 }
 
 impl LidarConfig {
-    /// Angle of ray `k` relative to the heading: evenly over the field of view, ray 0 at
-    /// `-fov/2`; a full circle does not repeat its first ray at the end.
+    /// Angle of ray `k` relative to the heading: `angles_deg[k]` when given, else evenly over
+    /// the field of view, ray 0 at `-fov/2`; a full circle does not repeat its first ray at
+    /// the end.
     pub fn ray_angle(&self, k: usize) -> f64 {
+        if let Some(a) = self.angles_deg.get(k) {
+            return a.to_radians();
+        }
         let rays = self.rays.max(1) as usize;
         if rays == 1 {
             return 0.0;
@@ -271,6 +316,11 @@ pub struct NoiseConfig {
     pub heading: f64,
     /// Lidar range noise in metres.
     pub lidar: f64,
+    /// Wheel slip: each tick each wheel moves `1 + N(0, wheel_slip)` times what it was
+    /// commanded (axle = the body diameter). This is what makes odometry drift: a robot that
+    /// integrates its own commands no longer knows its true heading.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub wheel_slip: f64,
 }
 
 /// How frames are lost.

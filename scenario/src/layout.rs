@@ -4,25 +4,100 @@
 use crate::config::Config;
 
 impl Config {
-    /// Start positions: the `robots.count` points of a square grid of `start.spacing` nearest
-    /// to `start.(x, y)` that lie inside the bounds and satisfy `clear` (the world passes its
-    /// obstacle clearance), so any count that fits the map gives a valid layout. `None` when
-    /// the map has no room for that many.
+    /// Start positions: see [`Config::start_poses`].
     pub fn start_positions(&self, clear: impl Fn(f64, f64) -> bool) -> Option<Vec<(f64, f64)>> {
-        let r = &self.robots;
-        nearest_grid_points(
-            r.count as usize,
-            (r.start.x, r.start.y),
-            r.start.spacing,
-            self.map.bounds,
-            r.radius,
-            clear,
-        )
+        self.start_poses(clear)
+            .map(|p| p.into_iter().map(|(x, y, _)| (x, y)).collect())
     }
 
-    /// Initial heading of every robot, radians.
+    /// Start poses `(x, y, heading)`: for each start group, its robots' share of the points of
+    /// a square grid of `start.spacing` nearest to the group's centre that lie inside the
+    /// bounds, satisfy `clear` (the world passes its obstacle clearance) and are not taken by
+    /// an earlier group; so any count that fits the map gives a valid layout. With
+    /// `start.jitter` / `start.heading_jitter_deg`, each robot is then moved off its point by a
+    /// uniform draw from the seed's `start` stream (a draw that is not `clear` is retried, up to
+    /// 32 times, then the grid point is kept). `None` when the map has no room for that many.
+    pub fn start_poses(&self, clear: impl Fn(f64, f64) -> bool) -> Option<Vec<(f64, f64, f64)>> {
+        let r = &self.robots;
+        let n = r.count as usize;
+        let groups = self.start_group_count();
+        let mut poses: Vec<(f64, f64, f64)> = Vec::with_capacity(n);
+        for g in 0..groups {
+            let members = (0..n).filter(|&i| self.start_group(i as u32) == g).count();
+            let (centre, _) = self.start_group_centre(g);
+            let taken = poses.clone();
+            let min_gap = r.start.spacing * 0.999;
+            let points = nearest_grid_points(
+                members,
+                centre,
+                r.start.spacing,
+                self.map.bounds,
+                r.radius,
+                |x, y| {
+                    clear(x, y)
+                        && taken
+                            .iter()
+                            .all(|p| (p.0 - x).powi(2) + (p.1 - y).powi(2) >= min_gap * min_gap)
+                },
+            )?;
+            let heading = self.nominal_heading(poses.len() as u32);
+            poses.extend(points.into_iter().map(|(x, y)| (x, y, heading)));
+        }
+        let s = &r.start;
+        if s.jitter > 0.0 || s.heading_jitter_deg > 0.0 {
+            use rand::Rng as _;
+            for (i, p) in poses.iter_mut().enumerate() {
+                let mut rng = crate::rng::stream(self.scenario.seed, "start", i as u64);
+                if s.jitter > 0.0 {
+                    for _ in 0..32 {
+                        let x = p.0 + rng.random_range(-s.jitter..=s.jitter);
+                        let y = p.1 + rng.random_range(-s.jitter..=s.jitter);
+                        if self.inside_bounds(x, y, r.radius) && clear(x, y) {
+                            (p.0, p.1) = (x, y);
+                            break;
+                        }
+                    }
+                }
+                if s.heading_jitter_deg > 0.0 {
+                    let h = s.heading_jitter_deg.to_radians();
+                    p.2 = crate::wrap_angle(p.2 + rng.random_range(-h..=h));
+                }
+            }
+        }
+        Some(poses)
+    }
+
+    /// Initial heading of every robot, radians (`robots.start.heading_deg`).
     pub fn start_heading(&self) -> f64 {
         self.robots.start.heading_deg.to_radians()
+    }
+
+    /// Number of start groups (one when `robots.start.groups` is empty).
+    pub fn start_group_count(&self) -> usize {
+        self.robots.start.groups.len().max(1)
+    }
+
+    /// The start group of robot `id`: contiguous blocks of ids, sizes differing by at most one.
+    pub fn start_group(&self, id: u32) -> usize {
+        let n = self.robots.count.max(1) as u64;
+        let g = self.start_group_count() as u64;
+        ((id as u64).min(n - 1) * g / n) as usize
+    }
+
+    /// The heading robot `id` is meant to start with, before any `heading_jitter_deg`:
+    /// what a robot that can only count its own wheel turns takes as its initial heading.
+    pub fn nominal_heading(&self, id: u32) -> f64 {
+        let (_, heading) = self.start_group_centre(self.start_group(id));
+        crate::wrap_angle(heading.to_radians())
+    }
+
+    /// Centre and heading (degrees) of start group `g`.
+    fn start_group_centre(&self, g: usize) -> ((f64, f64), f64) {
+        let s = &self.robots.start;
+        match s.groups.get(g) {
+            Some(grp) => ((grp.x, grp.y), grp.heading_deg.unwrap_or(s.heading_deg)),
+            None => ((s.x.unwrap_or(0.0), s.y.unwrap_or(0.0)), s.heading_deg),
+        }
     }
 }
 

@@ -92,8 +92,68 @@ impl Config {
         range_f("robots.radius", r.radius, 1e-3, 100.0)?;
         range_f("robots.max_speed", r.max_speed, 0.0, 1000.0)?;
         range_f("robots.max_turn_rate", r.max_turn_rate, 0.0, 1000.0)?;
-        range_f("robots.start.x", r.start.x, -MAX_COORD, MAX_COORD)?;
-        range_f("robots.start.y", r.start.y, -MAX_COORD, MAX_COORD)?;
+        let st = &r.start;
+        if st.groups.is_empty() {
+            for (key, v) in [("robots.start.x", st.x), ("robots.start.y", st.y)] {
+                let v = v.ok_or_else(|| {
+                    (
+                        key.to_string(),
+                        "expected a number (the centre of the start grid), or robots.start.groups"
+                            .to_string(),
+                    )
+                })?;
+                range_f(key, v, -MAX_COORD, MAX_COORD)?;
+            }
+        } else {
+            check(
+                st.x.is_none() && st.y.is_none(),
+                "robots.start.x",
+                "either robots.start.x/y (one grid) or robots.start.groups (one grid per group), not both",
+            )?;
+            check(
+                st.groups.len() <= r.count as usize,
+                "robots.start.groups",
+                &format!("at most robots.count = {} groups", r.count),
+            )?;
+            for (i, g) in st.groups.iter().enumerate() {
+                range_f(
+                    &format!("robots.start.groups[{i}].x"),
+                    g.x,
+                    -MAX_COORD,
+                    MAX_COORD,
+                )?;
+                range_f(
+                    &format!("robots.start.groups[{i}].y"),
+                    g.y,
+                    -MAX_COORD,
+                    MAX_COORD,
+                )?;
+                if let Some(h) = g.heading_deg {
+                    finite(&format!("robots.start.groups[{i}].heading_deg"), h)?;
+                }
+            }
+        }
+        range_f(
+            "robots.start.jitter",
+            st.jitter,
+            0.0,
+            // A hair of slack so (0.3 - 0.1) / 2 admits 0.1.
+            ((st.spacing - 2.0 * r.radius) / 2.0).max(0.0) + 1e-9,
+        )
+        .map_err(|(k, m)| {
+            (
+                k,
+                format!(
+                    "{m} (at most (spacing - 2 * radius) / 2, so robots never start overlapping)"
+                ),
+            )
+        })?;
+        range_f(
+            "robots.start.heading_jitter_deg",
+            st.heading_jitter_deg,
+            0.0,
+            180.0,
+        )?;
         range_f("robots.start.spacing", r.start.spacing, 2.0 * r.radius + 1e-6, 1e6)
             .map_err(|(k, _)| {
                 (
@@ -113,6 +173,20 @@ impl Config {
             MAX_LIDAR_RAYS as u64,
         )?;
         range_f("robots.lidar.fov_deg", r.lidar.fov_deg, 0.0, 360.0)?;
+        if !r.lidar.angles_deg.is_empty() {
+            check(
+                r.lidar.rays as usize == r.lidar.angles_deg.len(),
+                "robots.lidar.rays",
+                &format!(
+                    "{} (the number of robots.lidar.angles_deg), got {}",
+                    r.lidar.angles_deg.len(),
+                    r.lidar.rays
+                ),
+            )?;
+            for (k, a) in r.lidar.angles_deg.iter().enumerate() {
+                range_f(&format!("robots.lidar.angles_deg[{k}]"), *a, -360.0, 360.0)?;
+            }
+        }
         range_f("robots.lidar.range", r.lidar.range, 1e-3, 1e6)?;
         range_f(
             "robots.range_bearing.range",
@@ -130,6 +204,7 @@ impl Config {
         range_f("robots.noise.pose", r.noise.pose, 0.0, 100.0)?;
         range_f("robots.noise.heading", r.noise.heading, 0.0, 10.0)?;
         range_f("robots.noise.lidar", r.noise.lidar, 0.0, 100.0)?;
+        range_f("robots.noise.wheel_slip", r.noise.wheel_slip, 0.0, 1.0)?;
 
         let q = &self.radio;
         range_f("radio.range", q.range, 0.0, 1e9)?;
@@ -151,7 +226,7 @@ impl Config {
         Ok(())
     }
 
-    fn inside_bounds(&self, x: f64, y: f64, margin: f64) -> bool {
+    pub(crate) fn inside_bounds(&self, x: f64, y: f64, margin: f64) -> bool {
         let b = &self.map.bounds;
         x - margin > b[0] && x + margin < b[2] && y - margin > b[1] && y + margin < b[3]
     }

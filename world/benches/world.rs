@@ -100,12 +100,13 @@ fn world_tick(c: &mut Criterion) {
 fn lidar(c: &mut Criterion) {
     let cfg = scenario(9);
     let map = Map::build(&cfg.map).expect("map");
-    let lidar = cfg.robots.lidar;
+    let lidar = cfg.robots.lidar.clone();
     let rays = lidar.rays as usize;
     let mut g = c.benchmark_group("lidar");
     g.throughput(Throughput::Elements(rays as u64));
     // From inside the obstacle field of goto_simple (walls and four obstacles within reach).
-    let origin = (cfg.robots.start.x - 1.5, cfg.robots.start.y - 1.0);
+    let start = &cfg.robots.start;
+    let origin = (start.x.unwrap_or(0.0) - 1.5, start.y.unwrap_or(0.0) - 1.0);
     g.bench_function("map_cast_16_rays", |b| {
         let mut heading = 0.0f64;
         b.iter(|| {

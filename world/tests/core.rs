@@ -460,3 +460,35 @@ fn start_layout_follows_the_count_and_avoids_obstacles() {
         }
     }
 }
+
+#[test]
+fn wheel_slip_drifts_the_true_heading_from_the_commanded_one_reproducibly() {
+    let run = |extra: &[&str]| {
+        let mut w = World::new(&config(extra), VOCABULARY).unwrap();
+        drive(&mut w, 0.5, 0.0, 40);
+        let r = &w.robots()[0];
+        (r.x, r.y, r.theta)
+    };
+    let exact = run(&[]);
+    assert_eq!(exact.2, 0.0, "no slip: straight means straight");
+    assert!((exact.0 - 4.0).abs() < 1e-9);
+    let a = run(&["robots.noise.wheel_slip=0.1"]);
+    assert_eq!(a, run(&["robots.noise.wheel_slip=0.1"]), "seeded");
+    assert_ne!(a, run(&["robots.noise.wheel_slip=0.1", "scenario.seed=9"]));
+    // Unequal wheels turn a robot told to go straight: its own count of wheel turns (zero
+    // heading change) is now wrong by the drift.
+    assert!(a.2.abs() > 1e-3, "heading drifted by {}", a.2);
+    assert!((a.0 - 4.0).abs() < 0.5, "but it still went about 2 m: {a:?}");
+}
+
+#[test]
+fn explicit_lidar_angles_measure_along_their_rays() {
+    // Rays backwards and sideways; the circle at (6, 2) is ahead, the wall at x = 0 behind.
+    let cfg = config(&["robots.lidar.rays=2", "robots.lidar.angles_deg=[180.0, 0.0]"]);
+    let mut w = World::new(&cfg, VOCABULARY).unwrap();
+    let mut obs = vec![Observation::empty(0, 0)];
+    w.observe(&mut obs);
+    let l = obs[0].lidar();
+    assert!((l[0] - 2.0).abs() < 1e-6, "wall 2 m behind: {l:?}");
+    assert!((l[1] - 3.0).abs() < 1e-6, "circle edge 3 m ahead: {l:?}");
+}

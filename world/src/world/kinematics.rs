@@ -4,7 +4,10 @@
 
 use swarmrt_protocol::{Command, RobotState};
 
+use rand_distr::{Distribution, Normal};
+
 use super::{Event, World, wrap_angle};
+use crate::rng::Rng;
 
 impl World {
     /// Applies each accepted command's speeds (a robot without one stands still, its lidar as
@@ -13,6 +16,7 @@ impl World {
         let tick = self.tick;
         let dt = self.cfg.scenario.dt;
         let radius = self.cfg.robots.radius;
+        let slip_sd = self.cfg.robots.noise.wheel_slip;
         for (i, accepted) in accepted.iter().enumerate() {
             let r = &mut self.robots[i];
             if r.state != RobotState::Active {
@@ -24,6 +28,7 @@ impl World {
                 Some(c) => (c.v, c.omega, c.lidar_on != 0),
                 None => (0.0, 0.0, r.lidar_on),
             };
+            let (v, omega) = slip(v, omega, radius, slip_sd, &mut self.slip_rng[i]);
             r.v = v;
             r.omega = omega;
             r.lidar_on = lidar;
@@ -52,4 +57,20 @@ impl World {
             }
         }
     }
+}
+
+/// The speeds the wheels actually produce for the commanded `(v, omega)`: each wheel of a
+/// differential drive with axle `2 * radius` moves `1 + N(0, sd)` times its command. No draw
+/// when `sd` is zero (or the robot is told to stand still), so such runs keep their records.
+fn slip(v: f64, omega: f64, radius: f64, sd: f64, rng: &mut Rng) -> (f64, f64) {
+    if sd <= 0.0 || (v == 0.0 && omega == 0.0) {
+        return (v, omega);
+    }
+    let Ok(normal) = Normal::new(0.0, sd) else {
+        return (v, omega);
+    };
+    let (left, right) = (v - omega * radius, v + omega * radius);
+    let left = left * (1.0 + normal.sample(rng));
+    let right = right * (1.0 + normal.sample(rng));
+    ((left + right) / 2.0, (right - left) / (2.0 * radius))
 }

@@ -105,6 +105,8 @@ pub struct World {
     radio: RadioMedium,
     tick: u64,
     sensor_rng: Vec<Rng>,
+    /// Per robot, draws of `robots.noise.wheel_slip` (none when it is zero).
+    slip_rng: Vec<Rng>,
     inboxes: Vec<Vec<Frame>>,
     events: Vec<Event>,
     rejected_once: BTreeSet<(u32, &'static str)>,
@@ -130,26 +132,27 @@ impl World {
     pub fn new(cfg: &Config, vocabulary: Vocabulary) -> Result<World, MapError> {
         let map = Map::build(&cfg.map)?;
         let seed = cfg.scenario.seed;
-        let heading = wrap_angle(cfg.start_heading());
         let radius = cfg.robots.radius;
         let starts = cfg
-            .start_positions(|x, y| map.clearance((x, y)) >= radius * 1.5)
+            .start_poses(|x, y| map.clearance((x, y)) >= radius * 1.5)
             .ok_or_else(|| MapError {
                 key: "robots.start".to_string(),
                 message: format!(
-                    "expected room for {} robots {} m apart near ({}, {}), inside map.bounds and clear of obstacles; \
+                    "expected room for {} robots {} m apart near {}, inside map.bounds and clear of obstacles; \
                      the map has less (lower robots.count or robots.start.spacing, or move robots.start)",
-                    cfg.robots.count, cfg.robots.start.spacing, cfg.robots.start.x, cfg.robots.start.y
+                    cfg.robots.count,
+                    cfg.robots.start.spacing,
+                    start_centres(cfg)
                 ),
             })?;
         let robots: Vec<Robot> = starts
             .into_iter()
             .enumerate()
-            .map(|(i, (x, y))| Robot {
+            .map(|(i, (x, y, theta))| Robot {
                 id: i as u32,
                 x,
                 y,
-                theta: heading,
+                theta,
                 v: 0.0,
                 omega: 0.0,
                 lidar_on: true,
@@ -166,6 +169,9 @@ impl World {
             tick: 0,
             sensor_rng: (0..n)
                 .map(|i| rng::stream(seed, "sensor", i as u64))
+                .collect(),
+            slip_rng: (0..n)
+                .map(|i| rng::stream(seed, "wheel_slip", i as u64))
                 .collect(),
             inboxes: vec![Vec::new(); n],
             events: Vec::new(),
@@ -293,5 +299,19 @@ impl World {
         let out = f(self);
         self.stage_times.stop(stage, start);
         out
+    }
+}
+
+/// The start grid centres for an error message: `(x, y)` or each group's.
+fn start_centres(cfg: &Config) -> String {
+    let s = &cfg.robots.start;
+    if s.groups.is_empty() {
+        format!("({}, {})", s.x.unwrap_or(0.0), s.y.unwrap_or(0.0))
+    } else {
+        s.groups
+            .iter()
+            .map(|g| format!("({}, {})", g.x, g.y))
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }

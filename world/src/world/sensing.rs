@@ -39,7 +39,7 @@ impl World {
         let n = self.robots.len();
         assert_eq!(out.len(), n, "one observation slot per robot");
         let positions: Vec<(f64, f64)> = self.robots.iter().map(|r| (r.x, r.y)).collect();
-        let lidar = self.cfg.robots.lidar;
+        let lidar = &self.cfg.robots.lidar;
         let rb_range = self.cfg.robots.range_bearing.range;
         let radius = self.cfg.robots.radius;
         // One neighbour query per robot serves the lidar (bodies within range + radius) and
@@ -132,7 +132,7 @@ struct ObserveCtx<'a> {
     grid: &'a Grid,
     inboxes: &'a [Vec<Frame>],
     tick: u64,
-    lidar: swarmrt_scenario::LidarConfig,
+    lidar: &'a swarmrt_scenario::LidarConfig,
     rb_range: f64,
     radius: f64,
     reach: f64,

@@ -38,7 +38,8 @@ pub use params::FormationParams;
 /// centre of the desired formation). Assumes the start area is free of obstacles.
 pub fn offsets(cfg: &Config) -> Vec<(f64, f64)> {
     let starts = cfg.start_positions(|_, _| true).unwrap_or_else(|| {
-        vec![(cfg.robots.start.x, cfg.robots.start.y); cfg.robots.count as usize]
+        let s = &cfg.robots.start;
+        vec![(s.x.unwrap_or(0.0), s.y.unwrap_or(0.0)); cfg.robots.count as usize]
     });
     let n = starts.len().max(1) as f64;
     let cx = starts.iter().map(|p| p.0).sum::<f64>() / n;
@@ -99,7 +100,7 @@ impl Formation {
             offsets,
             dt: cfg.scenario.dt,
             radius: cfg.robots.radius,
-            lidar: cfg.robots.lidar,
+            lidar: cfg.robots.lidar.clone(),
             seed: cfg.scenario.seed,
             turn: p.turn_deg.to_radians(),
             psi: cfg.start_heading(),

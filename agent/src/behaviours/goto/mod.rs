@@ -59,7 +59,7 @@ impl Goto {
         let mut goto = Goto {
             id,
             params: *params,
-            lidar: cfg.robots.lidar,
+            lidar: cfg.robots.lidar.clone(),
             radius: cfg.robots.radius,
             dt: cfg.scenario.dt,
             max_speed: cfg.robots.max_speed,

@@ -1,0 +1,170 @@
+//! Start layouts: groups that start apart, seeded jitter, and the lidar's explicit ray angles.
+
+use swarmrt_scenario::{Config, ConfigError};
+
+const BASE: &str = r#"
+[scenario]
+name = "t"
+seed = 3
+ticks = 10
+[map]
+bounds = [0.0, 0.0, 10.0, 10.0]
+goal = { x = 8.0, y = 8.0, radius = 1.0 }
+[robots]
+count = 5
+radius = 0.05
+"#;
+
+fn load(extra: &str, ov: &[&str]) -> Result<Config, ConfigError> {
+    let ov: Vec<String> = ov.iter().map(|s| s.to_string()).collect();
+    Config::from_toml_str("t.toml", &format!("{BASE}{extra}"), &ov)
+}
+
+const GROUPS: &str = r#"
+[robots.start]
+spacing = 0.2
+heading_deg = 90.0
+groups = [{ x = 2.0, y = 2.0 }, { x = 8.0, y = 8.0, heading_deg = -90.0 }]
+"#;
+
+#[test]
+fn groups_split_robots_by_id_into_contiguous_blocks_around_their_centres() {
+    let c = load(GROUPS, &[]).unwrap();
+    let groups: Vec<usize> = (0..5).map(|i| c.start_group(i)).collect();
+    assert_eq!(groups, [0, 0, 0, 1, 1]);
+    let poses = c.start_poses(|_, _| true).unwrap();
+    for (i, p) in poses.iter().enumerate() {
+        let (centre, heading) = if i < 3 {
+            ((2.0, 2.0), 90f64)
+        } else {
+            ((8.0, 8.0), -90f64)
+        };
+        assert!((p.0 - centre.0).abs() <= 0.2 + 1e-9 && (p.1 - centre.1).abs() <= 0.2 + 1e-9);
+        assert!((p.2 - heading.to_radians()).abs() < 1e-12, "{p:?}");
+        assert!((c.nominal_heading(i as u32) - heading.to_radians()).abs() < 1e-12);
+    }
+    // Changing the count alone keeps the layout valid.
+    let c = load(GROUPS, &["robots.count=40"]).unwrap();
+    assert_eq!(c.start_poses(|_, _| true).unwrap().len(), 40);
+    assert_eq!(c.start_group(19), 0);
+    assert_eq!(c.start_group(20), 1);
+}
+
+#[test]
+fn groups_that_overlap_never_share_a_start_point() {
+    let text = r#"
+[robots.start]
+spacing = 0.2
+groups = [{ x = 5.0, y = 5.0 }, { x = 5.0, y = 5.0 }]
+"#;
+    let c = load(text, &["robots.count=30"]).unwrap();
+    let poses = c.start_poses(|_, _| true).unwrap();
+    for (i, a) in poses.iter().enumerate() {
+        for b in &poses[..i] {
+            let d = ((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt();
+            assert!(d >= 0.2 - 1e-9, "{a:?} {b:?}");
+        }
+    }
+}
+
+#[test]
+fn jitter_is_seeded_bounded_and_never_overlaps() {
+    let text = r#"
+[robots.start]
+x = 5.0
+y = 5.0
+spacing = 0.3
+jitter = 0.1
+heading_jitter_deg = 180.0
+"#;
+    let grid = load(
+        text,
+        &[
+            "robots.count=25",
+            "robots.start.jitter=0",
+            "robots.start.heading_jitter_deg=0",
+        ],
+    )
+    .unwrap()
+    .start_poses(|_, _| true)
+    .unwrap();
+    let a = load(text, &["robots.count=25"]).unwrap();
+    let pa = a.start_poses(|_, _| true).unwrap();
+    assert_eq!(
+        pa,
+        a.start_poses(|_, _| true).unwrap(),
+        "same seed, same layout"
+    );
+    let pb = load(text, &["robots.count=25", "scenario.seed=4"])
+        .unwrap()
+        .start_poses(|_, _| true)
+        .unwrap();
+    assert_ne!(pa, pb, "another seed, another layout");
+    for (p, g) in pa.iter().zip(&grid) {
+        assert!((p.0 - g.0).abs() <= 0.1 && (p.1 - g.1).abs() <= 0.1);
+    }
+    let headings: Vec<f64> = pa.iter().map(|p| p.2).collect();
+    assert!(headings.iter().any(|h| h.abs() > 1.0), "{headings:?}");
+    for (i, p) in pa.iter().enumerate() {
+        for q in &pa[..i] {
+            assert!(((p.0 - q.0).powi(2) + (p.1 - q.1).powi(2)).sqrt() >= 0.1 - 1e-9);
+        }
+    }
+    // A jittered point that is not clear is redrawn, then the grid point is kept.
+    let clear = |x: f64, _y: f64| x <= 5.0 + 1e-9;
+    for (p, g) in a.start_poses(clear).unwrap().iter().zip(&grid) {
+        assert!(p.0 <= 5.0 + 1e-9 || (p.0 == g.0 && p.1 == g.1), "{p:?}");
+    }
+}
+
+#[test]
+fn bad_layouts_name_the_key_and_bounds() {
+    let both = "[robots.start]\nx = 1.0\ny = 1.0\nspacing = 0.2\ngroups = [{ x = 2.0, y = 2.0 }]\n";
+    assert_eq!(load(both, &[]).unwrap_err().key, "robots.start.x");
+    let neither = "[robots.start]\nspacing = 0.2\n";
+    let e = load(neither, &[]).unwrap_err();
+    assert_eq!(e.key, "robots.start.x");
+    assert!(e.message.contains("robots.start.groups"), "{e}");
+    let e = load(GROUPS, &["robots.start.jitter=0.1"]).unwrap_err();
+    assert_eq!(e.key, "robots.start.jitter");
+    assert!(e.message.contains("[0, 0.05"), "{e}");
+    let e = load(GROUPS, &["robots.start.heading_jitter_deg=-1"]).unwrap_err();
+    assert_eq!(e.key, "robots.start.heading_jitter_deg");
+    let e = load(GROUPS, &["robots.count=1"]).unwrap_err();
+    assert_eq!(e.key, "robots.start.groups");
+}
+
+#[test]
+fn explicit_ray_angles_are_used_and_must_match_the_ray_count() {
+    let text = "[robots.lidar]\nrays = 3\nrange = 0.1\nangles_deg = [-17.0, 90.0, 150.0]\n";
+    let c = load(text, &[]).unwrap();
+    let angles: Vec<f64> = (0..3)
+        .map(|k| c.robots.lidar.ray_angle(k).to_degrees())
+        .collect();
+    for (a, b) in angles.iter().zip([-17.0, 90.0, 150.0]) {
+        assert!((a - b).abs() < 1e-9, "{angles:?}");
+    }
+    assert_eq!(
+        Config::from_toml_str("t.toml", &c.to_toml(), &[]).unwrap(),
+        c
+    );
+    let e = load(text, &["robots.lidar.rays=4"]).unwrap_err();
+    assert_eq!(e.key, "robots.lidar.rays");
+    assert!(e.message.contains("expected 3"), "{e}");
+    let e = load(text, &["robots.lidar.angles_deg=[0.0, 1.0, 1e9]"]).unwrap_err();
+    assert_eq!(e.key, "robots.lidar.angles_deg[2]");
+}
+
+#[test]
+fn wheel_slip_is_bounded_and_absent_from_a_config_that_does_not_use_it() {
+    let c = load("", &[]).unwrap();
+    assert!(!c.to_toml().contains("wheel_slip"));
+    assert!(!c.to_toml().contains("\njitter =") && !c.to_toml().contains("heading_jitter"));
+    let e = load("", &["robots.noise.wheel_slip=2"]).unwrap_err();
+    assert_eq!(e.key, "robots.noise.wheel_slip");
+    let c = load("", &["robots.noise.wheel_slip=0.05"]).unwrap();
+    assert_eq!(
+        Config::from_toml_str("t.toml", &c.to_toml(), &[]).unwrap(),
+        c
+    );
+}
