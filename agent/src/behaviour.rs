@@ -116,6 +116,43 @@ pub trait Behaviour: Send + Sized + 'static {
     ) -> Vec<(&'static str, Value)> {
         Vec::new()
     }
+
+    /// Its per-tick tables, computed after the run from the records alone: each is written
+    /// as `<name>.csv` in the run directory and drawn as its plots.
+    fn series(_cfg: &Config, _params: &Self::Params, _run: &Records) -> Vec<Series> {
+        Vec::new()
+    }
+}
+
+/// A per-tick table a behaviour derives from the records (`<name>.csv` in the run
+/// directory), with the line plots to draw from it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    /// File stem of the CSV.
+    pub name: &'static str,
+    /// Column names, the CSV header.
+    pub columns: Vec<&'static str>,
+    /// One row per line of the CSV, `columns.len()` values each.
+    pub rows: Vec<Vec<f64>>,
+    /// Plots drawn from the table.
+    pub plots: Vec<SeriesPlot>,
+}
+
+/// A line plot of some columns of a [`Series`] against another.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeriesPlot {
+    /// File stem (`<file>.svg` and `<file>.png`).
+    pub file: &'static str,
+    /// Caption.
+    pub title: String,
+    /// The x column.
+    pub x: &'static str,
+    /// One line per column named here ...
+    pub lines: Vec<&'static str>,
+    /// ... and per distinct value of this column (e.g. one line per flock).
+    pub group_by: Option<&'static str>,
+    /// Label of the y axis.
+    pub y_label: &'static str,
 }
 
 /// The empty note type, for behaviours that report nothing.

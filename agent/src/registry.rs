@@ -16,7 +16,7 @@ use swarmrt_protocol::records::Records;
 use swarmrt_protocol::{Command, NoteJson, Observation, RecordedNote, Vocabulary};
 use swarmrt_scenario::{BehaviourSection, Config, ConfigError, KeyError};
 
-use crate::behaviour::{Act, Behaviour, Params};
+use crate::behaviour::{Act, Behaviour, Params, Series};
 pub use crate::behaviours::{BEHAVIOURS, Note, RadioMsg};
 use crate::consensus::{ConsensusNote, Decision};
 use crate::inbox::Heard;
@@ -46,6 +46,8 @@ pub trait Plugin: Sync {
     fn metric_names(&self) -> &'static [&'static str];
     /// Its metrics for a finished run.
     fn metrics(&self, cfg: &Config, run: &Records) -> Result<Vec<(&'static str, Value)>, KeyError>;
+    /// Its per-tick tables for a finished run.
+    fn series(&self, cfg: &Config, run: &Records) -> Result<Vec<Series>, KeyError>;
 }
 
 /// A behaviour driven for one robot, its types erased: the agent hands it the tick's
@@ -117,6 +119,11 @@ impl<B: Enveloped> Plugin for Entry<B> {
     fn metrics(&self, cfg: &Config, run: &Records) -> Result<Vec<(&'static str, Value)>, KeyError> {
         let p = parse::<B>(&cfg.behaviour.params)?;
         Ok(B::metrics(cfg, &p, run))
+    }
+
+    fn series(&self, cfg: &Config, run: &Records) -> Result<Vec<Series>, KeyError> {
+        let p = parse::<B>(&cfg.behaviour.params)?;
+        Ok(B::series(cfg, &p, run))
     }
 }
 

@@ -4,6 +4,7 @@
 //!   schema is `swarmrt_protocol::records`).
 //! - [`metrics`]: the metrics registry: what every run gets from its records, plus each
 //!   behaviour's own (found through `swarmrt_agent::registry`).
+//! - [`series`]: a behaviour's per-tick tables (`<name>.csv`) and their plots.
 //! - [`consensus_check`]: Raft's safety properties and the consensus metrics, from the notes.
 //! - [`sweep_csv`]: `sweep.csv`, one row per finished run of a sweep.
 //! - [`stats`]: a sweep's rows grouped by combination, with their statistics.
@@ -14,5 +15,6 @@ pub mod consensus_check;
 pub mod metrics;
 pub mod plot;
 pub mod run_dir;
+pub mod series;
 pub mod stats;
 pub mod sweep_csv;

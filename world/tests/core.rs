@@ -478,13 +478,19 @@ fn wheel_slip_drifts_the_true_heading_from_the_commanded_one_reproducibly() {
     // Unequal wheels turn a robot told to go straight: its own count of wheel turns (zero
     // heading change) is now wrong by the drift.
     assert!(a.2.abs() > 1e-3, "heading drifted by {}", a.2);
-    assert!((a.0 - 4.0).abs() < 0.5, "but it still went about 2 m: {a:?}");
+    assert!(
+        (a.0 - 4.0).abs() < 0.5,
+        "but it still went about 2 m: {a:?}"
+    );
 }
 
 #[test]
 fn explicit_lidar_angles_measure_along_their_rays() {
     // Rays backwards and sideways; the circle at (6, 2) is ahead, the wall at x = 0 behind.
-    let cfg = config(&["robots.lidar.rays=2", "robots.lidar.angles_deg=[180.0, 0.0]"]);
+    let cfg = config(&[
+        "robots.lidar.rays=2",
+        "robots.lidar.angles_deg=[180.0, 0.0]",
+    ]);
     let mut w = World::new(&cfg, VOCABULARY).unwrap();
     let mut obs = vec![Observation::empty(0, 0)];
     w.observe(&mut obs);

@@ -10,4 +10,5 @@
 crate::registry::behaviours! {
     Goto => goto::Goto,
     Formation => formation::Formation,
+    Flocking => flocking::Flocking,
 }

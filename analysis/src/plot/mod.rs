@@ -1,11 +1,13 @@
 //! One plotting module for every figure swarmrt draws: a run's trajectories
-//! ([`trajectory`]), a sweep's metric plots ([`sweep`]) and the benchmark figures ([`bench`]).
+//! ([`trajectory`]) and its behaviour's per-tick tables ([`series`]), a sweep's metric plots
+//! ([`sweep`]) and the benchmark figures ([`bench`]).
 //!
 //! They share what is here: the embedded font (plotters' `ab_glyph` feature, so no system
 //! font library is needed), the tab10 palette, plotters' errors as `anyhow` errors, and one
 //! writer that renders a [`Drawing`] as SVG and as PNG.
 
 pub mod bench;
+pub mod series;
 pub mod sweep;
 pub mod trajectory;
 

@@ -134,6 +134,9 @@ pub fn run(
     if let Err(e) = run_dir::write_plots(&dir, &cfg) {
         tracing::warn!("could not draw the trajectory plot: {e:#}");
     }
+    if let Err(e) = swarmrt_analysis::series::write_all(&cfg, &dir) {
+        tracing::warn!("could not write the behaviour's per-tick tables: {e:#}");
+    }
     println!("{}", dir.display());
     if let Some(f) = failure {
         return Err(SwarmError::Internal(anyhow::anyhow!(

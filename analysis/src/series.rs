@@ -1,0 +1,57 @@
+//! A behaviour's per-tick tables (`swarmrt_agent::behaviour::Series`): computed from a run's
+//! records, written as `<name>.csv` in the run directory and drawn as their line plots.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use swarmrt_agent::behaviour::Series;
+use swarmrt_scenario::Config;
+
+use crate::plot::series::write_series_plot;
+
+/// The behaviour's tables for the run in `dir` (none for a behaviour that has no tables).
+pub fn from_records(cfg: &Config, dir: &Path) -> anyhow::Result<Vec<Series>> {
+    let Some(p) = swarmrt_agent::registry::plugin(&cfg.behaviour.kind) else {
+        return Ok(Vec::new());
+    };
+    let rec = crate::run_dir::read(dir)?;
+    p.series(cfg, &rec)
+        .map_err(|(key, message)| anyhow::anyhow!("key `{key}`: {message}"))
+}
+
+/// `s` as CSV: the header, then one line per row.
+pub fn to_csv(s: &Series) -> String {
+    let mut out = s.columns.join(",");
+    out.push('\n');
+    for row in &s.rows {
+        for (i, v) in row.iter().enumerate() {
+            if i > 0 {
+                out.push(',');
+            }
+            let _ = write!(out, "{v}");
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Writes every table of the run in `dir` (atomically: temp file, then rename) and its
+/// plots; returns the files written.
+pub fn write_all(cfg: &Config, dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let mut written = Vec::new();
+    for s in from_records(cfg, dir)? {
+        let path = dir.join(format!("{}.csv", s.name));
+        let tmp = dir.join(format!("{}.csv.tmp", s.name));
+        std::fs::write(&tmp, to_csv(&s)).with_context(|| format!("writing {}", tmp.display()))?;
+        std::fs::rename(&tmp, &path)?;
+        written.push(path);
+        for plot in &s.plots {
+            let svg = dir.join(format!("{}.svg", plot.file));
+            let png = dir.join(format!("{}.png", plot.file));
+            write_series_plot(&s, plot, &svg, &png)?;
+            written.extend([svg, png]);
+        }
+    }
+    Ok(written)
+}
