@@ -176,6 +176,26 @@ fn quadrant_leader() {
 }
 
 #[test]
+fn flocking_obstacles() {
+    check("flocking_obstacles", false);
+}
+
+#[test]
+fn flocking_crossing() {
+    check("flocking_crossing", false);
+}
+
+#[test]
+fn flocking_calibrated() {
+    check("flocking_calibrated", false);
+}
+
+#[test]
+fn flocking_pso() {
+    check("flocking_pso", false);
+}
+
+#[test]
 fn raft_election() {
     check("raft_election", true);
 }

@@ -43,6 +43,9 @@ pub struct FlockTick {
     pub fitness_term: f64,
     /// Centre of mass.
     pub com: (f64, f64),
+    /// How far the centre of mass has moved along the migration urge since tick 0 (d_p of
+    /// eq. 19 at this tick).
+    pub travelled: f64,
 }
 
 /// Per flock (start group), its ticks from tick 1 on (v' needs the tick before). A tick
@@ -55,6 +58,7 @@ pub fn flock_ticks(cfg: &Config, params: &FlockingParams, run: &Records) -> Vec<
     for (f, series) in out.iter_mut().enumerate() {
         let m = migration(params, f);
         let mut prev: Option<(f64, f64)> = None;
+        let mut start: Option<(f64, f64)> = None;
         let mut sum_p = 0.0;
         let mut n_p = 0u64;
         for rows in &run.ticks {
@@ -86,6 +90,7 @@ pub fn flock_ticks(cfg: &Config, params: &FlockingParams, run: &Records) -> Vec<
                 1.0
             };
             let tick = first.tick;
+            let origin = *start.get_or_insert(com);
             if let Some(p) = prev {
                 let along = ((com.0 - p.0) * m.0 + (com.1 - p.1) * m.1) / dt;
                 let velocity = (along / params.performance_speed).max(0.0);
@@ -102,6 +107,7 @@ pub fn flock_ticks(cfg: &Config, params: &FlockingParams, run: &Records) -> Vec<
                     overall: sum_p / n_p as f64,
                     fitness_term: 0.3 * order + 0.4 * cohesion + 0.3 * separation,
                     com,
+                    travelled: (com.0 - origin.0) * m.0 + (com.1 - origin.1) * m.1,
                 });
             }
             prev = Some(com);
@@ -123,15 +129,12 @@ fn migration(params: &FlockingParams, f: usize) -> (f64, f64) {
 }
 
 /// Time means of one flock's series, its travelled distance d_p along the migration urge
-/// (from its first to its last centre of mass) and F_p = 0.9 mean(f_p) + 0.1 d_p (eq. 19; the
-/// paper's flock travels along y, its migration urge; ours along whatever the urge is).
-fn summary(series: &[FlockTick], m: (f64, f64)) -> Value {
+/// (from tick 0 to its last tick) and F_p = 0.9 mean(f_p) + 0.1 d_p (eq. 19; the paper's flock
+/// travels along y, its migration urge; ours along whatever the urge is).
+fn summary(series: &[FlockTick]) -> Value {
     let n = series.len().max(1) as f64;
     let mean = |f: fn(&FlockTick) -> f64| series.iter().map(f).sum::<f64>() / n;
-    let distance = match (series.first(), series.last()) {
-        (Some(a), Some(b)) => (b.com.0 - a.com.0) * m.0 + (b.com.1 - a.com.1) * m.1,
-        _ => 0.0,
-    };
+    let distance = series.last().map_or(0.0, |t| t.travelled);
     json!({
         "order": mean(|t| t.order),
         "cohesion": mean(|t| t.cohesion),
@@ -150,7 +153,7 @@ pub fn metrics(cfg: &Config, params: &FlockingParams, run: &Records) -> Vec<(&'s
         .iter()
         .enumerate()
         .map(|(f, s)| {
-            let mut v = summary(s, migration(params, f));
+            let mut v = summary(s);
             v["flock"] = json!(f);
             v
         })

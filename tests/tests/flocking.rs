@@ -1,0 +1,102 @@
+//! Seed 004 flocking end to end: environment 1 as five robot processes, the crossing flocks,
+//! and identical records in both modes with a lossy, late radio.
+
+use std::path::Path;
+use std::time::Duration;
+use swarmrt_tests::{assert_ok, bytes, metrics, swarm};
+
+const LIMIT: Duration = Duration::from_secs(300);
+
+fn run(config: &str, dir: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["run", config, "--out", dir.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    assert_ok(&swarm(&args, LIMIT));
+    metrics(dir)
+}
+
+/// `flocking.csv` as (flock, cohesion) per row.
+fn cohesion_rows(dir: &Path) -> Vec<(u32, f64)> {
+    let text = String::from_utf8(bytes(dir, "flocking.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (flock, cohesion) = (col("flock"), col("cohesion"));
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[flock].parse().unwrap(), f[cohesion].parse().unwrap())
+        })
+        .collect()
+}
+
+/// Environment 1 with our hand-crafted weights: measured p̄ = 0.572 over 1250 ticks (seed 1);
+/// the bar leaves room for changes that do not break the flock.
+#[test]
+fn five_robot_processes_flock_through_the_obstacles_without_a_collision() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("env1");
+    let m = run("configs/flocking_obstacles.toml", &dir, &[]);
+    assert_eq!(m["mode"], "processes");
+    assert_eq!(m["collisions"], 0, "{m}");
+    assert_eq!(m["down"], 0, "{m}");
+    let f = &m["flocking"];
+    let p = f["performance"].as_f64().unwrap();
+    assert!(p > 0.45, "overall performance {p}: {f}");
+    assert!(
+        f["distance"].as_f64().unwrap() > 2.5,
+        "crossed the field: {f}"
+    );
+    assert!(dir.join("flocking.csv").exists() && dir.join("flocking.png").exists());
+}
+
+/// Two flocks head-on: each stays together (c' never below 0.85, i.e. its robots never average
+/// more than 18 cm from their centre of mass) and each gets across.
+#[test]
+fn crossing_flocks_each_keep_their_cohesion_and_get_across() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("env2");
+    let m = run("configs/flocking_crossing.toml", &dir, &["--in-process"]);
+    assert_eq!(m["collisions"], 0, "{m}");
+    let flocks = m["flocking"]["flocks"].as_array().unwrap();
+    assert_eq!(flocks.len(), 2);
+    for f in flocks {
+        assert!(f["distance"].as_f64().unwrap() > 2.5, "{f}");
+    }
+    let rows = cohesion_rows(&dir);
+    for flock in 0..2 {
+        let c: Vec<f64> = rows.iter().filter(|r| r.0 == flock).map(|r| r.1).collect();
+        assert!(c.len() > 1000, "flock {flock} has {} ticks", c.len());
+        let worst = c.iter().cloned().fold(f64::INFINITY, f64::min);
+        assert!(worst > 0.85, "flock {flock} spread out: c' fell to {worst}");
+    }
+}
+
+/// One-byte messages, odometry with wheel slip, radio loss, delay and jitter: both modes write
+/// the same bytes.
+#[test]
+fn calibrated_world_records_are_identical_in_both_modes_with_loss_and_delay() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sets = [
+        "--ticks",
+        "300",
+        "--set",
+        "radio.loss=0.3",
+        "--set",
+        "radio.delay_ticks=3",
+        "--set",
+        "radio.jitter_ticks=2",
+    ];
+    let a = tmp.path().join("processes");
+    let b = tmp.path().join("in-process");
+    run("configs/flocking_calibrated.toml", &a, &sets);
+    let mut in_process = sets.to_vec();
+    in_process.push("--in-process");
+    let m = run("configs/flocking_calibrated.toml", &b, &in_process);
+    assert!(m["radio"]["dropped_loss"].as_u64().unwrap() > 0, "{m}");
+    for file in ["trajectory.csv", "events.jsonl", "flocking.csv"] {
+        assert!(
+            bytes(&a, file) == bytes(&b, file),
+            "{file} differs between modes"
+        );
+    }
+}
