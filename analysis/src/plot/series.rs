@@ -86,6 +86,7 @@ impl Drawing for Figure {
             .configure_mesh()
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
+            .max_light_lines(1)
             .label_style(("sans-serif", 14))
             .draw()
             .map_err(draw_err("grid"))?;
