@@ -67,9 +67,14 @@ impl Param {
         format!("{}={}", self.key, self.value(x))
     }
 
-    /// `x` as a share of the bounds, 0 at `lo` and 1 at `hi`.
+    /// The value `x` sets as a share of the bounds, 0 at `lo` and 1 at `hi`.
     pub fn normalise(&self, x: f64) -> f64 {
-        (x - self.lo) / (self.hi - self.lo)
+        let v = if self.integer {
+            x.round().clamp(self.lo.ceil(), self.hi.floor())
+        } else {
+            x
+        };
+        (v - self.lo) / (self.hi - self.lo)
     }
 }
 
