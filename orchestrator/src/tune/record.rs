@@ -270,7 +270,7 @@ impl Settings {
         }
         if self.base_config != then.base_config {
             return Some(format!(
-                "another config or --set ({})",
+                "another config or --set: {}",
                 crate::commands::sweep::first_difference(&self.base_config, &then.base_config)
             ));
         }
