@@ -541,3 +541,87 @@ fn write_outputs(
         .map_err(|e| SwarmError::Internal(e.context("drawing the tune plots")))?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    fn tune_of<'a>(args: &'a TuneArgs, seeds: Option<Vec<u64>>) -> Tune<'a> {
+        Tune {
+            args,
+            params: Vec::new(),
+            settings: Settings {
+                params: Vec::new(),
+                fitness: args.fitness.clone(),
+                maximize: args.maximize,
+                particles: 2,
+                evaluations: 4,
+                inertia: 0.729,
+                c1: 1.494,
+                c2: 1.494,
+                vmax: 1.0,
+                seed: args.seed,
+                seeds,
+                base_config: String::new(),
+            },
+            out: PathBuf::from("unused"),
+            scenario: "s".into(),
+        }
+    }
+
+    fn args(extra: &[&str]) -> TuneArgs {
+        let mut argv = vec!["tune", "c.toml", "--param", "a.b=0:1", "--fitness", "m"];
+        argv.extend(extra);
+        TuneArgs::try_parse_from(argv).unwrap()
+    }
+
+    fn row(status: Status, fitness: Option<f64>) -> EvalRow {
+        EvalRow {
+            eval: 0,
+            iteration: 0,
+            particle: 0,
+            kind: Kind::New,
+            values: Vec::new(),
+            seed: 0,
+            fitness,
+            status,
+        }
+    }
+
+    #[test]
+    fn maximising_negates_and_failures_are_the_worst_either_way() {
+        for (extra, sign) in [(&[][..], 1.0), (&["--maximize"][..], -1.0)] {
+            let a = args(extra);
+            let t = tune_of(&a, None);
+            assert_eq!(t.internal(&row(Status::Ok, Some(3.0))), 3.0 * sign);
+            assert_eq!(
+                t.external(t.internal(&row(Status::Ok, Some(3.0)))),
+                Some(3.0)
+            );
+            assert_eq!(t.internal(&row(Status::Missing, None)), f64::INFINITY);
+            assert_eq!(t.internal(&row(Status::Failed, None)), f64::INFINITY);
+            assert_eq!(t.external(f64::INFINITY), None);
+        }
+    }
+
+    #[test]
+    fn run_seeds_come_from_the_seed_or_cycle_through_the_list() {
+        let a = args(&["--seed", "3"]);
+        let derived = tune_of(&a, None);
+        let seeds: Vec<u64> = (0..50).map(|k| derived.run_seed(k)).collect();
+        assert_eq!(
+            seeds,
+            (0..50).map(|k| derived.run_seed(k)).collect::<Vec<_>>()
+        );
+        let distinct: std::collections::BTreeSet<_> = seeds.iter().collect();
+        assert_eq!(distinct.len(), 50);
+        assert!(seeds.iter().all(|&s| s <= u32::MAX as u64));
+        let b = args(&["--seed", "4"]);
+        assert_ne!(tune_of(&b, None).run_seed(0), seeds[0]);
+
+        let listed = tune_of(&a, Some(vec![10, 11, 12]));
+        let cycle: Vec<u64> = (0..7).map(|k| listed.run_seed(k)).collect();
+        assert_eq!(cycle, [10, 11, 12, 10, 11, 12, 10]);
+    }
+}
