@@ -458,7 +458,13 @@ fn open_out(out: &Path, tune: &Tune) -> SwarmResult<BTreeMap<u64, EvalRow>> {
             json_path.display()
         )));
     };
-    if let Some(why) = tune.settings.difference(&then) {
+    // Compare through the same JSON text both ways: serde_json's float parsing need not give
+    // back the very bits it printed, but it gives the same bits for the same text.
+    let now: Settings = serde_json::to_string(&tune.settings)
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or_else(|| tune.settings.clone());
+    if let Some(why) = now.difference(&then) {
         return Err(SwarmError::User(format!(
             "--out {}: a tune with other settings ({why}); give another --out, or the same \
              command as before (only --iterations, --jobs and --in-process may change)",
