@@ -35,8 +35,23 @@ fn tune(out: &Path, extra: &[&str]) -> std::process::Output {
 /// Two particles, four evaluations an iteration (one re-evaluation each), two iterations;
 /// the fitness is a radio counter, which the runs replay exactly.
 fn small(out: &Path, jobs: &str) -> std::process::Output {
-    let mut extra: Vec<&str> = PARAMS.to_vec();
-    extra.extend([
+    let args = small_args(out, jobs);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    swarm(&args, LIMIT)
+}
+
+fn small_args(out: &Path, jobs: &str) -> Vec<String> {
+    let mut args = vec![
+        "tune",
+        "configs/goto_simple.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "scenario.ticks=60",
+        "--in-process",
+    ];
+    args.extend(PARAMS);
+    args.extend([
         "--fitness",
         "radio.sent",
         "--particles",
@@ -50,7 +65,7 @@ fn small(out: &Path, jobs: &str) -> std::process::Output {
         "--jobs",
         jobs,
     ]);
-    tune(out, &extra)
+    args.into_iter().map(str::to_string).collect()
 }
 
 fn rows(out: &Path) -> Vec<Vec<String>> {
@@ -139,7 +154,44 @@ fn tune_is_reproducible_resumes_and_stays_within_bounds() {
         assert!(a.join(f).exists(), "{f}");
     }
 
-    // The same command, one run at a time: the same bytes.
+    // The same command one run at a time, Ctrl-C'd after three rows and resumed: the same
+    // bytes.
+    let mut child = std::process::Command::new(swarm_bin())
+        .current_dir(workspace())
+        .args(small_args(&b, "1"))
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_until("three rows", LIMIT, || {
+        assert!(child.try_wait().unwrap().is_none(), "the tune ended early");
+        std::fs::read_to_string(b.join("tune.csv")).is_ok_and(|t| t.lines().count() >= 4)
+    });
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+    let result = wait_with_watchdog(child, LIMIT);
+    assert_eq!(result.status.code(), Some(130), "{result:?}");
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert!(
+        err.lines()
+            .any(|l| l.contains("resume with:") && l.contains(b.to_str().unwrap())),
+        "{err}"
+    );
+    // Whole rows only, and a run directory for each row and nothing else.
+    let part = rows(&b);
+    assert!(part.len() >= 4 && part.len() < 9, "{part:?}");
+    let dirs: BTreeSet<String> = part[1..]
+        .iter()
+        .map(|r| format!("e{:05}", r[0].parse::<u64>().unwrap()))
+        .collect();
+    let all: BTreeSet<String> = std::fs::read_dir(b.join("runs"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(all, dirs);
     assert_ok(&small(&b, "1"));
     assert_eq!(bytes(&a, "tune.csv"), bytes(&b, "tune.csv"));
     assert_eq!(bytes(&a, "best.toml"), bytes(&b, "best.toml"));
