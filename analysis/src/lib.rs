@@ -8,7 +8,8 @@
 //! - [`consensus_check`]: Raft's safety properties and the consensus metrics, from the notes.
 //! - [`sweep_csv`]: `sweep.csv`, one row per finished run of a sweep.
 //! - [`stats`]: a sweep's rows grouped by combination, with their statistics.
-//! - [`plot`]: every figure: a run's trajectories, a sweep's metrics, the benchmarks'.
+//! - [`plot`]: every figure: a run's trajectories, a sweep's metrics, a tune's progress, the
+//!   benchmarks'.
 #![warn(missing_docs)]
 
 pub mod consensus_check;

@@ -54,3 +54,50 @@ pub fn energy_saving(rec: &Records) -> Option<f64> {
     }
     (all > 0).then(|| 1.0 - on as f64 / all as f64)
 }
+
+/// The number at a dotted path of a run's `metrics.json` (`steps_to_target`,
+/// `radio.dropped`, `flocking.fitness`): each segment descends into an object, and a key that
+/// itself holds dots (`"flocking.fitness"` at the top) is found too. Booleans read as 0 and 1;
+/// anything else (missing, null, a string, an object) is `None`.
+pub fn lookup(metrics: &Value, path: &str) -> Option<f64> {
+    let obj = metrics.as_object()?;
+    if let Some(v) = obj.get(path) {
+        return match v {
+            Value::Number(n) => n.as_f64(),
+            Value::Bool(b) => Some(*b as u8 as f64),
+            _ => None,
+        };
+    }
+    path.match_indices('.').find_map(|(i, _)| {
+        let inner = obj.get(&path[..i]).filter(|v| v.is_object())?;
+        lookup(inner, &path[i + 1..])
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lookup_follows_dotted_paths() {
+        let m = json!({
+            "steps_to_target": 412,
+            "radio": {"dropped": 3, "sent": 10},
+            "flocking": {"fitness": 0.25},
+            "a.b": 1.5,
+            "reached_target": true,
+            "scenario": "x",
+            "energy_saving": null,
+        });
+        assert_eq!(lookup(&m, "steps_to_target"), Some(412.0));
+        assert_eq!(lookup(&m, "radio.dropped"), Some(3.0));
+        assert_eq!(lookup(&m, "flocking.fitness"), Some(0.25));
+        assert_eq!(lookup(&m, "a.b"), Some(1.5));
+        assert_eq!(lookup(&m, "reached_target"), Some(1.0));
+        assert_eq!(lookup(&m, "scenario"), None);
+        assert_eq!(lookup(&m, "energy_saving"), None);
+        assert_eq!(lookup(&m, "radio"), None);
+        assert_eq!(lookup(&m, "radio.nope"), None);
+        assert_eq!(lookup(&m, "nope.x"), None);
+    }
+}

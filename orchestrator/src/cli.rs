@@ -26,6 +26,9 @@ pub enum Cmd {
     Clean,
     /// Run a scenario over the cross product of varied keys and seeds; write sweep.csv and plots.
     Sweep(SweepArgs),
+    /// Tune numeric config keys with noise-resistant PSO against a metric; write tune.csv,
+    /// best.toml and plots.
+    Tune(TuneArgs),
     /// Measure the IPC and the lock-step swarm against their alternatives (runs `swarm-bench`).
     #[command(disable_help_flag = true)]
     Bench(BenchArgs),
@@ -97,6 +100,67 @@ pub struct SweepArgs {
     /// reached_target, down, collisions, and steps_to_target, radio.delivered when present].
     #[arg(long = "metric", value_name = "NAME")]
     pub metric: Vec<String>,
+}
+
+/// `swarm tune` (docs/tune.md).
+#[derive(Parser, Debug, Clone)]
+pub struct TuneArgs {
+    /// The scenario file.
+    pub config: PathBuf,
+    /// A numeric config key and its bounds, e.g. --param behaviour.speed=0.1:1.5 (repeatable).
+    #[arg(long = "param", value_name = "KEY=LO:HI", required = true)]
+    pub param: Vec<String>,
+    /// The metric of metrics.json to optimise, a dotted path: steps_to_target, radio.dropped,
+    /// flocking.fitness.
+    #[arg(long, value_name = "METRIC")]
+    pub fitness: String,
+    /// Maximise the fitness [default: minimise].
+    #[arg(long)]
+    pub maximize: bool,
+    /// Particles P.
+    #[arg(long, default_value_t = 7, value_parser = clap::value_parser!(u64).range(1..=10_000))]
+    pub particles: u64,
+    /// Iterations; a finished tune run again with more iterations goes on.
+    #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    pub iterations: u64,
+    /// Evaluations per iteration E: P new positions plus E - P personal-best re-evaluations
+    /// spread evenly (a multiple of P, at least P) [default: 2P].
+    #[arg(long)]
+    pub evaluations: Option<u64>,
+    /// Seed of the swarm and of the run seeds it derives for each evaluation.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Cycle the evaluations through N run seeds start-seed, start-seed + 1, ... instead of
+    /// deriving one per evaluation from --seed.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    pub seeds: Option<u64>,
+    /// First seed of --seeds [default: the config's scenario.seed].
+    #[arg(long, requires = "seeds")]
+    pub start_seed: Option<u64>,
+    /// Inertia weight w.
+    #[arg(long, default_value_t = 0.729)]
+    pub inertia: f64,
+    /// Weight c1 of the personal best.
+    #[arg(long, default_value_t = 1.494)]
+    pub c1: f64,
+    /// Weight c2 of the neighbourhood best.
+    #[arg(long, default_value_t = 1.494)]
+    pub c2: f64,
+    /// Largest velocity component, as a fraction of the parameter's bound width.
+    #[arg(long, default_value_t = 1.0)]
+    pub vmax: f64,
+    /// Runs at once.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
+    pub jobs: u64,
+    /// Run every evaluation with the same cores in one process, no IPC (identical results).
+    #[arg(long)]
+    pub in_process: bool,
+    /// The tune directory [default: runs/tune-<scenario>-<time>/]; an existing one is resumed.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Override a config key in every run, e.g. --set scenario.ticks=300 (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
 }
 
 /// `swarm bench <what> [args]`: everything after `bench` goes to `swarm-bench` untouched,

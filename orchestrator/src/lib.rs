@@ -10,3 +10,4 @@ pub mod error;
 pub mod processes;
 pub mod run_dir;
 pub mod sweep;
+pub mod tune;

@@ -24,6 +24,7 @@ fn main() -> std::process::ExitCode {
         Cmd::Check(args) => commands::check::check(args),
         Cmd::Clean => commands::clean::clean(),
         Cmd::Sweep(args) => commands::sweep::sweep(args, rx),
+        Cmd::Tune(args) => commands::tune::tune(args, rx),
         // Dispatched above, before the handler exists; here only to keep the match whole.
         Cmd::Bench(args) => commands::bench::bench(args),
         Cmd::Fuzz(cmd) => commands::fuzz::fuzz(cmd),

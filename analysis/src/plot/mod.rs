@@ -1,6 +1,6 @@
 //! One plotting module for every figure swarmrt draws: a run's trajectories
 //! ([`trajectory`]) and its behaviour's per-tick tables ([`series`]), a sweep's metric plots
-//! ([`sweep`]) and the benchmark figures ([`bench`]).
+//! ([`sweep`]), a tune's progress ([`tune`]) and the benchmark figures ([`bench`]).
 //!
 //! They share what is here: the embedded font (plotters' `ab_glyph` feature, so no system
 //! font library is needed), the tab10 palette, plotters' errors as `anyhow` errors, and one
@@ -10,6 +10,7 @@ pub mod bench;
 pub mod series;
 pub mod sweep;
 pub mod trajectory;
+pub mod tune;
 
 use std::fmt::Display;
 use std::path::Path;

@@ -6,3 +6,4 @@ pub mod clean;
 pub mod fuzz;
 pub mod run;
 pub mod sweep;
+pub mod tune;

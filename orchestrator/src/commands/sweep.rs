@@ -271,7 +271,7 @@ fn check_out_dir(out: &Path) -> SwarmResult<()> {
     )))
 }
 
-fn mode(in_process: bool) -> &'static str {
+pub(crate) fn mode(in_process: bool) -> &'static str {
     if in_process {
         "in-process"
     } else {
@@ -279,8 +279,9 @@ fn mode(in_process: bool) -> &'static str {
     }
 }
 
-/// The sweep's bar: runs done, elapsed, ETA. Hidden when stderr is not a terminal.
-fn progress_bar(total: u64) -> ProgressBar {
+/// The sweep's (and the tune's) bar: runs done, elapsed, ETA. Hidden when stderr is not a
+/// terminal.
+pub(crate) fn progress_bar(total: u64) -> ProgressBar {
     let pb = ProgressBar::with_draw_target(
         Some(total),
         if std::io::stderr().is_terminal() {
@@ -380,7 +381,7 @@ fn check_same_config(run_dir: &Path, expected: &Config, csv: &Path) -> SwarmResu
 }
 
 /// The first differing line of two TOML texts, with its section: `[radio] loss = 0.1 here, loss = 0.2 there`.
-fn first_difference(want: &str, found: &str) -> String {
+pub(crate) fn first_difference(want: &str, found: &str) -> String {
     let mut section = String::new();
     let mut w = want.lines();
     let mut f = found.lines();
@@ -403,11 +404,10 @@ fn first_difference(want: &str, found: &str) -> String {
     }
 }
 
-/// Refuses a `--metric` no run of this scenario reports, before anything runs.
-fn check_metrics(requested: &[String], cfg: &Config, existing: Option<&Table>) -> SwarmResult<()> {
-    if requested.is_empty() {
-        return Ok(());
-    }
+/// The scalar metrics a run of this scenario reports, known before anything runs: what
+/// `swarm run` adds, the world's, and the metrics registry's for its behaviour (also used by
+/// `swarm tune` to check `--fitness`).
+pub(crate) fn known_metrics(cfg: &Config) -> BTreeSet<String> {
     let mut known: BTreeSet<String> = RUN_METRICS.iter().map(|s| s.to_string()).collect();
     known.extend(
         swarmrt_analysis::metrics::names(cfg)
@@ -418,6 +418,16 @@ fn check_metrics(requested: &[String], cfg: &Config, existing: Option<&Table>) -
     if let Ok(v) = serde_json::to_value(WorldMetrics::default()) {
         known.extend(table::flatten(&v).into_keys());
     }
+    known.remove("mode");
+    known
+}
+
+/// Refuses a `--metric` no run of this scenario reports, before anything runs.
+fn check_metrics(requested: &[String], cfg: &Config, existing: Option<&Table>) -> SwarmResult<()> {
+    if requested.is_empty() {
+        return Ok(());
+    }
+    let mut known = known_metrics(cfg);
     if let Some(t) = existing {
         known.extend(t.metric_columns().iter().cloned());
     }
@@ -500,8 +510,8 @@ fn write_reports(
 }
 
 /// This invocation as a shell command, with `--out` added when it was defaulted, so it
-/// resumes the same sweep.
-fn command_line(out: &Path, add_out: bool) -> String {
+/// resumes the same sweep (or tune).
+pub(crate) fn command_line(out: &Path, add_out: bool) -> String {
     let mut args: Vec<String> = std::env::args().collect();
     if let Some(first) = args.first_mut() {
         *first = "swarm".into();
