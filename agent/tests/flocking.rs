@@ -351,3 +351,23 @@ fn eq14_22_metrics_on_a_known_run() {
     assert!(close(f["distance"].as_f64().unwrap(), 0.0064, 1e-9), "{f}");
     assert_eq!(f["flocks"].as_array().unwrap().len(), 1);
 }
+
+#[test]
+fn a_robot_knocked_down_stays_in_its_flock_and_slows_it() {
+    let cfg = registry::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../configs/flocking_obstacles.toml"),
+        &["robots.count=2".to_string()],
+    )
+    .unwrap();
+    let traj = "tick,id,x,y,theta,v,omega,lidar,state\n\
+         0,0,0.0,0.0,0.0,0,0,1,active\n\
+         0,1,0.2,0.0,0.0,0,0,1,active\n\
+         1,0,0.0064,0.0,0.0,0,0,1,active\n\
+         1,1,0.2,0.0,0.0,0,0,1,down\n";
+    let rec = Records::parse(traj, "").unwrap();
+    let t = flock_ticks(&cfg, &params(&cfg), &rec)[0][0];
+    assert_eq!(t.robots, 1, "one still active");
+    // The centre of mass moved 3.2 mm, not 6.4: the down robot is still part of the flock.
+    assert!(close(t.velocity, 0.05 / 0.0628, 1e-9), "{}", t.velocity);
+}

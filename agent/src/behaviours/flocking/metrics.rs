@@ -2,6 +2,11 @@
 //! velocity v' along the migration urge, instant performance p' and overall performance p̄;
 //! and the PSO fitness F_p. Computed from the true poses in `trajectory.csv`, so both modes
 //! give the same numbers.
+//!
+//! A flock is all its robots, whatever their state: a robot knocked down by a collision (or
+//! killed) stays where it stopped and drags the flock's cohesion and speed down. The paper's
+//! e-pucks just bump; counting only robots still moving would reward weights that crash fast
+//! (a flock whose robots are all down would drop out of p̄ instead of scoring zero).
 
 use serde_json::{Value, json};
 use swarmrt_protocol::records::Records;
@@ -25,7 +30,7 @@ pub const NAMES: [&str; 6] = [
 pub struct FlockTick {
     /// The tick.
     pub tick: u64,
-    /// Active robots of the flock.
+    /// Robots of the flock still active (the metrics count all of them).
     pub robots: usize,
     /// o'(t), eq. 14: length of the mean heading vector, 1 when all point the same way.
     pub order: f64,
@@ -48,8 +53,7 @@ pub struct FlockTick {
     pub travelled: f64,
 }
 
-/// Per flock (start group), its ticks from tick 1 on (v' needs the tick before). A tick
-/// where the flock has no active robot is left out.
+/// Per flock (start group), its ticks from tick 1 on (v' needs the tick before).
 pub fn flock_ticks(cfg: &Config, params: &FlockingParams, run: &Records) -> Vec<Vec<FlockTick>> {
     let flocks = cfg.start_group_count();
     let dt = cfg.scenario.dt;
@@ -64,7 +68,7 @@ pub fn flock_ticks(cfg: &Config, params: &FlockingParams, run: &Records) -> Vec<
         for rows in &run.ticks {
             let members: Vec<_> = rows
                 .iter()
-                .filter(|r| r.active && cfg.start_group(r.id) == f)
+                .filter(|r| cfg.start_group(r.id) == f)
                 .collect();
             let Some(first) = members.first() else {
                 prev = None;
@@ -99,7 +103,7 @@ pub fn flock_ticks(cfg: &Config, params: &FlockingParams, run: &Records) -> Vec<
                 n_p += 1;
                 series.push(FlockTick {
                     tick,
-                    robots: members.len(),
+                    robots: members.iter().filter(|r| r.active).count(),
                     order,
                     cohesion,
                     velocity,
