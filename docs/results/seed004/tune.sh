@@ -55,3 +55,16 @@ for env in obstacles crossing; do
   cp "$OUT/${env}_pso/summary.md" "$HERE/${env}_pso_summary.md"
   cp "$OUT/${env}_pso/sweep.csv" "$HERE/${env}_pso_sweep.csv"
 done
+
+# The calibrated tune's weights in environment 3 (the paper's Fig. 8 ran with PSO weights).
+best_cal() {
+  python3 -c "import tomllib; print(tomllib.load(open('$OUT/tune_calibrated/best.toml','rb'))['behaviour']['$1'])"
+}
+SETS=()
+for k in alpha beta delta iota zeta kappa mb; do SETS+=(--set "behaviour.$k=$(best_cal $k)"); done
+"$SWARM" sweep configs/flocking_calibrated.toml --vary behaviour.heading=odometry "${SETS[@]}" \
+  --set robots.start.jitter=0.01 --seeds 10 --jobs "$JOBS" --out "$OUT/calibrated_pso" \
+  --metric flocking.performance --metric flocking.order --metric flocking.cohesion \
+  --metric flocking.velocity --metric flocking.fitness --metric collisions
+cp "$OUT/calibrated_pso/summary.md" "$HERE/calibrated_pso_summary.md"
+cp "$OUT/calibrated_pso/sweep.csv" "$HERE/calibrated_pso_sweep.csv"
