@@ -172,14 +172,23 @@ proptest! {
     }
 }
 
+/// `configs/<name>.toml` with `extra` overrides, resolved by the registry.
+fn load(name: &str, extra: &[&str]) -> Result<Config, swarmrt_scenario::ConfigError> {
+    let ov: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../configs")
+        .join(format!("{name}.toml"));
+    registry::load(&path, &ov)
+}
+
 /// The crossing scenario (two flocks of five), with `extra` overrides.
 fn crossing(extra: &[&str]) -> Config {
-    let ov: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
-    registry::load(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/flocking_crossing.toml"),
-        &ov,
-    )
-    .unwrap()
+    load("flocking_crossing", extra).unwrap()
+}
+
+/// Environment 1 with `count` robots.
+fn obstacles(count: u32) -> Config {
+    load("flocking_obstacles", &[&format!("robots.count={count}")]).unwrap()
 }
 
 fn params(cfg: &Config) -> FlockingParams {
@@ -280,15 +289,7 @@ fn odometry_integrates_the_robots_own_turns_and_ignores_the_heading_sensor() {
 
 #[test]
 fn bad_flocking_parameters_name_their_key() {
-    let err = |set: &[&str]| {
-        let ov: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-        registry::load(
-            &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("../configs/flocking_crossing.toml"),
-            &ov,
-        )
-        .unwrap_err()
-    };
+    let err = |set: &[&str]| load("flocking_crossing", set).unwrap_err();
     assert_eq!(err(&["behaviour.mb=1.5"]).key, "behaviour.mb");
     assert_eq!(
         err(&["behaviour.migration_deg=[0.0, 90.0, 180.0]"]).key,
@@ -317,12 +318,7 @@ fn two_robot_records(theta1: f64) -> Records {
 
 #[test]
 fn eq14_22_metrics_on_a_known_run() {
-    let cfg = registry::load(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../configs/flocking_obstacles.toml"),
-        &["robots.count=2".to_string()],
-    )
-    .unwrap();
+    let cfg = obstacles(2);
     let p = params(&cfg);
     let ticks = flock_ticks(&cfg, &p, &two_robot_records(0.0));
     assert_eq!(ticks.len(), 1);
@@ -354,12 +350,7 @@ fn eq14_22_metrics_on_a_known_run() {
 
 #[test]
 fn a_robot_knocked_down_stays_in_its_flock_and_slows_it() {
-    let cfg = registry::load(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../configs/flocking_obstacles.toml"),
-        &["robots.count=2".to_string()],
-    )
-    .unwrap();
+    let cfg = obstacles(2);
     let traj = "tick,id,x,y,theta,v,omega,lidar,state\n\
          0,0,0.0,0.0,0.0,0,0,1,active\n\
          0,1,0.2,0.0,0.0,0,0,1,active\n\
