@@ -20,6 +20,10 @@ struct Args {
     /// How many times the fault schedule restarted this robot before this process.
     #[arg(long, default_value_t = 0)]
     incarnation: u32,
+    /// Stable storage directory for the robot's persistent Raft state (with
+    /// `consensus.storage` on).
+    #[arg(long)]
+    storage: Option<std::path::PathBuf>,
 }
 
 /// Entry point of the process (the `swarm-agent` binary in the orchestrator package).
@@ -45,7 +49,13 @@ pub fn main() -> std::process::ExitCode {
         tracing::error!(robots = cfg.robots.count, "robot id out of range");
         return std::process::ExitCode::from(2);
     }
-    match shell::run(&run, &cfg, args.robot, args.incarnation) {
+    match shell::run(
+        &run,
+        &cfg,
+        args.robot,
+        args.incarnation,
+        args.storage.as_deref(),
+    ) {
         // Exit code 0 means exactly "the world ended the run", so the orchestrator can tell a
         // clean end from a robot that vanished mid-run.
         Ok(shell::Exit::Shutdown) => std::process::ExitCode::SUCCESS,

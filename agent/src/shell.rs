@@ -10,6 +10,7 @@ use swarmrt_protocol::{PROTOCOL_VERSION, RobotState};
 use swarmrt_scenario::Config;
 
 use crate::Agent;
+use crate::consensus::storage::Store;
 
 /// How long a robot sleeps before checking for a termination request when no tick comes
 /// (a watchdog interval, not a poll: a tick wakes it immediately).
@@ -77,11 +78,41 @@ pub enum Exit {
 
 /// Runs robot `id` of run `run` until the world shuts down or the process is told to stop.
 /// `incarnation` is 0 for the first process of the robot and counts scheduled restarts.
-pub fn run(run: &RunServices, cfg: &Config, id: u32, incarnation: u32) -> Result<Exit, IpcError> {
+/// `storage` is the run's stable-storage directory: with `consensus.storage` on, the robot
+/// restores its persistent Raft state from it and writes that state there before each
+/// command leaves (write-ahead).
+pub fn run(
+    run: &RunServices,
+    cfg: &Config,
+    id: u32,
+    incarnation: u32,
+    storage: Option<&std::path::Path>,
+) -> Result<Exit, IpcError> {
     let node = ipc::node(run, &run.robot_node_name(id))?;
     let ports = ipc::RobotPorts::open(&node, run)?;
 
-    let mut agent = Agent::fresh(cfg, id, incarnation);
+    let (mut store, restored) = match storage {
+        Some(dir) if crate::consensus::stores_state(cfg) => {
+            if incarnation == 0 {
+                // The robot's first process: whatever a file there holds is not its state.
+                let _ = std::fs::remove_file(dir.join(format!("raft-{id}.state")));
+            }
+            let (store, state) = Store::open(dir, id)?;
+            (Some(store), state)
+        }
+        _ => (None, None),
+    };
+    if let Some(s) = &restored {
+        tracing::info!(
+            term = s.term,
+            last_index = s.log.last_index(),
+            "restored from stable storage"
+        );
+    }
+    let mut agent = match restored {
+        Some(state) => Agent::restore(cfg, id, state, incarnation),
+        None => Agent::fresh(cfg, id, incarnation),
+    };
     let misbehave = misbehave_for(id);
     if let Some(m) = misbehave {
         tracing::warn!(?m, "test hook: this robot sends malformed commands");
@@ -114,6 +145,12 @@ pub fn run(run: &RunServices, cfg: &Config, id: u32, incarnation: u32) -> Result
             let mut cmd = agent.step(obs);
             let obs_tick = obs.tick;
             drop(sample);
+            if let (Some(store), Some(state)) = (
+                store.as_mut(),
+                agent.consensus().and_then(|c| c.persistent()),
+            ) {
+                store.save(&state)?;
+            }
             match misbehave {
                 Some(Misbehave::Nan) => cmd.v = f64::NAN,
                 Some(Misbehave::Inf) => cmd.omega = f64::INFINITY,

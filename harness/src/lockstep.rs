@@ -2,6 +2,7 @@
 //! order the process shells call them, so both modes write byte-identical records.
 
 use swarmrt_agent::Agent;
+use swarmrt_agent::consensus::raft::Persistent;
 use swarmrt_protocol::{Command, Observation, RobotState};
 use swarmrt_scenario::Config;
 use swarmrt_world::map::MapError;
@@ -14,6 +15,10 @@ pub struct Lockstep {
     agents: Vec<Agent>,
     obs: Vec<Observation>,
     commands: Vec<Option<Command>>,
+    /// Each robot's stable storage (`consensus.storage`): the persistent Raft state its
+    /// process would have written before sending this tick's command.
+    stored: Vec<Option<Persistent>>,
+    storing: bool,
 }
 
 impl Lockstep {
@@ -27,6 +32,8 @@ impl Lockstep {
             agents: (0..n as u32).map(|id| Agent::new(cfg, id)).collect(),
             obs: vec![Observation::empty(0, 0); n],
             commands: Vec::with_capacity(n),
+            stored: vec![None; n],
+            storing: swarmrt_agent::consensus::stores_state(cfg),
         })
     }
 
@@ -47,25 +54,43 @@ impl Lockstep {
 
     /// The first phase of a tick: carry out the process faults due (there is no process to
     /// signal: a kill or freeze already changed the world's state; a restart starts the
-    /// robot's brain afresh, as a new process would), then fill every observation.
+    /// robot's brain afresh, as a new process would, from its stored state if it keeps one),
+    /// then fill every observation.
     pub fn observe(&mut self) {
         for signal in self.world.take_signals() {
             if let ProcessSignal::Restart { robot, incarnation } = signal {
-                self.agents[robot as usize] = Agent::fresh(&self.cfg, robot, incarnation);
+                let r = robot as usize;
+                self.agents[r] = match self.stored[r].clone() {
+                    Some(state) => Agent::restore(&self.cfg, robot, state, incarnation),
+                    None => Agent::fresh(&self.cfg, robot, incarnation),
+                };
             }
         }
         self.world.observe(&mut self.obs);
     }
 
-    /// The second phase: every robot whose process would run answers its observation.
+    /// The second phase: every robot whose process would run answers its observation (and,
+    /// with storage on, makes its persistent state durable first, as its process does).
     pub fn think(&mut self) {
         self.commands.clear();
-        self.commands
-            .extend(self.agents.iter_mut().zip(&self.obs).map(|(a, o)| {
-                RobotState::from_u8(o.state)
-                    .is_some_and(RobotState::expects_command)
-                    .then(|| a.step(o))
-            }));
+        let storing = self.storing;
+        self.commands.extend(
+            self.agents
+                .iter_mut()
+                .zip(&self.obs)
+                .zip(&mut self.stored)
+                .map(|((a, o), stored)| {
+                    RobotState::from_u8(o.state)
+                        .is_some_and(RobotState::expects_command)
+                        .then(|| {
+                            let cmd = a.step(o);
+                            if storing {
+                                *stored = a.consensus().and_then(|c| c.persistent());
+                            }
+                            cmd
+                        })
+                }),
+        );
     }
 
     /// The third phase: the world steps with the answers.

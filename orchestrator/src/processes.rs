@@ -321,6 +321,8 @@ fn supervise(
             }
         }
     }
+    // Stable storage of the robots' persistent Raft state, for restarts (`consensus.storage`).
+    let storage = dir.join("storage");
     let spawn_robot = |id: u32, incarnation: u32| {
         child_command(&agent_bin)
             .args([
@@ -333,6 +335,8 @@ fn supervise(
                 "--config",
             ])
             .arg(config_path)
+            .arg("--storage")
+            .arg(&storage)
             .stdin(Stdio::null())
             .spawn()
             .and_then(|c| reap_robot(c.id() as i32, &tx).map(|()| c))

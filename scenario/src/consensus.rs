@@ -80,6 +80,15 @@ pub struct ConsensusConfig {
     pub propose: Vec<Proposal>,
     /// Quadrant leader choice timing.
     pub quadrant: QuadrantConfig,
+    /// Raft keeps each robot's term, vote and log in stable storage that survives its process
+    /// (a file per robot under the run directory; modelled in memory `--in-process`), so a
+    /// restarted robot cannot vote twice in one term. `false` shows what amnesia does.
+    #[serde(skip_serializing_if = "is_true")]
+    pub storage: bool,
+}
+
+fn is_true(v: &bool) -> bool {
+    *v
 }
 
 impl Default for ConsensusConfig {
@@ -94,6 +103,7 @@ impl Default for ConsensusConfig {
             stats_every: 20,
             propose: Vec::new(),
             quadrant: QuadrantConfig::default(),
+            storage: true,
         }
     }
 }

@@ -179,10 +179,10 @@ fn freezes_and_restarts_replay_bit_for_bit_with_real_processes() {
     assert_eq!(m["faults_injected"], 4, "{m}");
     let c = &m["consensus"];
     assert_eq!(c["safety_violations"], 0, "{c}");
-    assert!(
-        c["amnesia_restarts"].as_u64().unwrap() >= 1,
-        "a fresh process has lost its Raft state: {c}"
-    );
+    // Stable storage (on by default): the fresh processes restored term, vote and log.
+    assert_eq!(c["amnesia_restarts"], 0, "{c}");
+    let stored = std::fs::metadata(p.join("storage/raft-5.state")).expect("robot 5's state file");
+    assert!(stored.len() > 8, "robot 5 wrote at least one record");
     assert_eq!(
         metrics(&q)["consensus"],
         *c,
@@ -223,6 +223,30 @@ fn freezes_and_restarts_replay_bit_for_bit_with_real_processes() {
             .starts_with(r#"{"event":"note","tick":265,"robot":5,"note":{"consensus":{"boot""#)),
         "no boot note of the fresh robot 5"
     );
+}
+
+#[test]
+fn without_stable_storage_a_restarted_robot_forgets_and_the_checker_says_so() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (p, q) = run_both_modes(
+        tmp.path(),
+        &[
+            "configs/raft_election.toml",
+            "--ticks",
+            "500",
+            "--set",
+            "consensus.storage=false",
+            "--set",
+            "faults.restart=[{tick=250,robot=5,down_ticks=15},{tick=400,robot=\"leader\"}]",
+        ],
+    );
+    let c = &metrics(&p)["consensus"];
+    assert!(
+        c["amnesia_restarts"].as_u64().unwrap() >= 1,
+        "a fresh process without storage has lost its Raft state: {c}"
+    );
+    assert_eq!(metrics(&q)["consensus"], *c);
+    assert!(!p.join("storage/raft-5.state").exists(), "nothing stored");
 }
 
 #[test]

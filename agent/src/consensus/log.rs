@@ -14,6 +14,16 @@ impl Log {
         Log::default()
     }
 
+    /// A log holding `entries` at indexes 1, 2, ...
+    pub fn from_entries(entries: Vec<Entry>) -> Log {
+        Log { entries }
+    }
+
+    /// Every entry, index 1 first.
+    pub fn entries(&self) -> &[Entry] {
+        &self.entries
+    }
+
     /// Index of the last entry (0 when empty).
     pub fn last_index(&self) -> u64 {
         self.entries.len() as u64

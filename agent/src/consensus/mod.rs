@@ -39,6 +39,7 @@ pub mod messages;
 pub mod notes;
 pub mod quadrant;
 pub mod raft;
+pub mod storage;
 
 use rand::Rng as _;
 use swarmrt_protocol::{Command, MAX_REPORT, Observation};
@@ -152,6 +153,14 @@ fn sent_note_bound() -> usize {
         quad_claim: u32::MAX,
         quad_leader: u32::MAX,
     }))
+}
+
+/// True when robots of this scenario keep their persistent Raft state in stable storage
+/// (`consensus.storage`, Raft only: the quadrant choice has no state worth keeping).
+pub fn stores_state(cfg: &Config) -> bool {
+    cfg.consensus
+        .as_ref()
+        .is_some_and(|c| c.storage && c.algorithm == Algorithm::Raft)
 }
 
 impl Consensus {

@@ -128,6 +128,7 @@ const SCENARIO_KEYS: &[&str] = &[
     "consensus.quadrant",
     "consensus.quadrant.claim_period",
     "consensus.quadrant.decide_tick",
+    "consensus.storage",
 ];
 
 /// Values that sit on type and range edges, as TOML text.

@@ -52,6 +52,17 @@ impl std::fmt::Display for Violation {
     }
 }
 
+/// A log entry the record does not show (its term and digest are unknown).
+const UNKNOWN: (u64, u32) = (u64::MAX, 0);
+
+/// Appends `entry` to `v`'s log and chain; returns the new chain hash.
+fn push_entry(v: &mut View, entry: (u64, u32)) -> u64 {
+    let c = chain(v.chain[v.chain.len() - 1], entry.0, entry.1);
+    v.log.push(entry);
+    v.chain.push(c);
+    c
+}
+
 #[derive(Debug, Clone)]
 struct View {
     alive: bool,
@@ -224,16 +235,15 @@ impl Checker {
                 let len = v.log.len() as u64;
                 if term < v.term || last_index < len || commit < v.commit {
                     self.amnesia += 1;
-                } else if last_index > len {
-                    self.violation(
-                        tick,
-                        r,
-                        "record",
-                        format!("boot with {last_index} entries, record shows {len}"),
-                    );
                 }
                 v.log.truncate(last_index.min(len) as usize);
                 v.chain.truncate(v.log.len() + 1);
+                // A boot ahead of the record is a robot that made its state durable and died
+                // before that tick's command (and notes) left: write-ahead allows it. Its
+                // extra entries are unknown here and stay unchecked until overwritten.
+                while (v.log.len() as u64) < last_index {
+                    push_entry(v, UNKNOWN);
+                }
                 v.term = term;
                 v.vote = vote;
                 v.role = Role::Follower;
@@ -309,13 +319,13 @@ impl Checker {
                 v.log.truncate(keep);
                 v.chain.truncate(keep + 1);
                 while (v.log.len() as u64) < index.saturating_sub(1) {
-                    v.log.push((u64::MAX, 0));
-                    let c = chain(v.chain[v.chain.len() - 1], u64::MAX, 0);
-                    v.chain.push(c);
+                    push_entry(v, UNKNOWN);
                 }
-                v.log.push((term, digest));
-                let c = chain(v.chain[v.chain.len() - 1], term, digest);
-                v.chain.push(c);
+                let c = push_entry(v, (term, digest));
+                if v.log.contains(&UNKNOWN) {
+                    // A prefix the record does not show cannot be compared with others'.
+                    return;
+                }
                 match self.entries.get(&(index, term)) {
                     Some(&other) if other != c => self.violation(
                         tick,
@@ -378,6 +388,10 @@ impl Checker {
                 for i in v.commit + 1..=index {
                     let e = v.log[i as usize - 1];
                     let k = i as usize - 1;
+                    if e == UNKNOWN {
+                        // Not shown by the record: another robot's notes decide it.
+                        continue;
+                    }
                     if k < self.committed.len() {
                         if self.committed[k] != e {
                             self.violation(
@@ -418,7 +432,8 @@ impl Checker {
                         format!("applied {index} beyond its commit {}", v.commit),
                     );
                 }
-                if v.log.get(index as usize - 1) != Some(&(term, digest)) || index == 0 {
+                let held = (index as usize).checked_sub(1).and_then(|i| v.log.get(i));
+                if held != Some(&(term, digest)) && held != Some(&UNKNOWN) {
                     self.violation(
                         tick,
                         r,
@@ -505,7 +520,8 @@ impl Checker {
                     // never decrease, so neither are the entries after it).
                     break;
                 }
-                if v.log.get(i) != Some(&(t, d)) {
+                let held = v.log.get(i);
+                if held != Some(&(t, d)) && held != Some(&UNKNOWN) {
                     found.push((
                         r,
                         format!(

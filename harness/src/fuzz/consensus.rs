@@ -19,7 +19,7 @@ use swarmrt_agent::consensus::stream;
 use swarmrt_scenario::consensus::{ConsensusConfig, Proposal};
 use swarmrt_scenario::{Config, LossModel};
 
-use super::{Sim, base_config, grid};
+use super::{CrashPoint, Sim, base_config, grid};
 
 /// A fault in the fault phase.
 #[derive(Debug, Clone, PartialEq)]
@@ -258,7 +258,7 @@ pub fn run(case: &Case, record: bool) -> Outcome {
                         *robot
                     };
                     if sim.alive(target) {
-                        sim.crash(target);
+                        sim.crash_at(target, crash_point(case.seed, k));
                         crashed_by[target as usize] = Some(k);
                     }
                 }
@@ -345,6 +345,17 @@ pub fn applied_decision(raft: &Raft, id: u16) -> bool {
     (1..=raft.applied()).any(|i| {
         matches!(raft.log().get(i).map(|e| e.item), Some(Item::Decision { id: k, .. }) if k == id)
     })
+}
+
+/// Where fault `k` of case `seed` crashes its robot: between ticks, after the write to stable
+/// storage but before sending, or during a torn write; a third each, from a stream of its own
+/// so the cases drawn before crash points existed stay the same.
+fn crash_point(seed: u64, k: usize) -> CrashPoint {
+    match stream(seed, "crash_point", k as u64).random_range(0..3) {
+        0 => CrashPoint::BetweenTicks,
+        1 => CrashPoint::AfterWrite,
+        _ => CrashPoint::TornWrite,
+    }
 }
 
 #[cfg(test)]

@@ -8,7 +8,9 @@
 //! world does not offer: crashes at any tick (the robot stops talking, its notes stop, the
 //! checker hears of its death) and restarts with the persistent Raft state the robot had
 //! (term, vote, log, commit: Raft's stable storage; volatile state and the behaviour start
-//! afresh).
+//! afresh). A crash can also land inside a tick ([`CrashPoint`]): after the robot made its new
+//! state durable but before its messages and notes left, or while that write was torn (the
+//! storage then holds the state before the tick).
 
 pub mod consensus;
 pub mod election;
@@ -60,11 +62,26 @@ fn event_line(e: &Event) -> String {
     serde_json::to_string(e).expect("events always serialize")
 }
 
+/// Where in a robot's tick a crash lands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CrashPoint {
+    /// Between ticks: everything it decided was stored and sent.
+    BetweenTicks,
+    /// After its new state was written to stable storage, before its command (messages and
+    /// notes) left: the storage is ahead of what anyone heard.
+    AfterWrite,
+    /// While writing: the last record is torn, so the storage holds the state from before
+    /// this tick, and nothing of this tick left.
+    TornWrite,
+}
+
 /// Robots, medium and checker of one in-process consensus run.
 pub struct Sim {
     cfg: Config,
     agents: Vec<Option<Agent>>,
     saved: Vec<Option<Persistent>>,
+    /// Robots to crash inside their next step, and where.
+    crash_in_step: Vec<Option<CrashPoint>>,
     incarnation: Vec<u32>,
     medium: RadioMedium,
     positions: Vec<(f64, f64)>,
@@ -90,6 +107,7 @@ impl Sim {
         Sim {
             agents: (0..n as u32).map(|i| Some(Agent::new(cfg, i))).collect(),
             saved: vec![None; n],
+            crash_in_step: vec![None; n],
             incarnation: vec![0; n],
             medium: RadioMedium::new(radio, cfg.scenario.seed, n),
             positions,
@@ -158,6 +176,8 @@ impl Sim {
 
     /// Crashes robot `r` between ticks, keeping its persistent state for a restart.
     pub fn crash(&mut self, r: u32) {
+        // A crash due inside the next step is overtaken by this one.
+        self.crash_in_step[r as usize] = None;
         let Some(a) = self.agents[r as usize].take() else {
             return;
         };
@@ -175,9 +195,22 @@ impl Sim {
         }
     }
 
+    /// Crashes robot `r` at `point`: [`CrashPoint::BetweenTicks`] now, the others inside its
+    /// next step.
+    pub fn crash_at(&mut self, r: u32, point: CrashPoint) {
+        match point {
+            CrashPoint::BetweenTicks => self.crash(r),
+            _ if self.alive(r) => self.crash_in_step[r as usize] = Some(point),
+            _ => {}
+        }
+    }
+
     /// Restarts crashed robot `r` from its saved persistent state.
     pub fn restart(&mut self, r: u32) {
         if self.agents[r as usize].is_some() {
+            // A crash still due inside this tick and a restart at the same boundary: it
+            // never went down.
+            self.crash_in_step[r as usize] = None;
             return;
         }
         self.incarnation[r as usize] += 1;
@@ -195,6 +228,7 @@ impl Sim {
         let n = self.agents.len();
         let tick = self.tick;
         let mut outboxes: Vec<Vec<Frame>> = vec![Vec::new(); n];
+        let mut crashed_in_step = Vec::new();
         for (i, (slot, outbox)) in self.agents.iter_mut().zip(&mut outboxes).enumerate() {
             let Some(agent) = slot.as_mut() else {
                 continue;
@@ -213,7 +247,13 @@ impl Sim {
                 obs.inbox[slot] = *f;
             }
             obs.inbox_len = inbox.len().min(obs.inbox.len()) as u16;
+            let before = agent.consensus().and_then(|c| c.persistent());
             let cmd = agent.step(&obs);
+            if let Some(point) = self.crash_in_step[i].take() {
+                // The process dies before its command leaves: no frame, no note.
+                crashed_in_step.push((i as u32, point, before));
+                continue;
+            }
             *outbox = cmd.outbox().to_vec();
             for note in cmd.notes::<Note>().unwrap_or_default() {
                 if let Some(rec) = &mut self.record {
@@ -226,6 +266,12 @@ impl Sim {
                 if let Note::Consensus(c) = note {
                     self.checker.note(tick, i as u32, &c);
                 }
+            }
+        }
+        for (r, point, before) in crashed_in_step {
+            self.crash(r);
+            if point == CrashPoint::TornWrite {
+                self.saved[r as usize] = before;
             }
         }
         let can_talk: Vec<bool> = self.agents.iter().map(Option::is_some).collect();
