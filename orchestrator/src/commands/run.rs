@@ -52,6 +52,7 @@ pub fn run(
         }
     };
     let config_path = run_dir::prepare(&dir, &cfg)?;
+    run_dir::reserve_metrics_room(&dir, cfg.robots.count);
     let pb = progress_bar(cfg.scenario.ticks);
     let started = Instant::now();
     let mut metrics = json!({
@@ -73,7 +74,8 @@ pub fn run(
             // A write failed (e.g. the disk is full): the records stop mid-tick.
             Err(e) => {
                 pb.finish_and_clear();
-                return Err(failed_early(&dir, &cfg, metrics, started, e.into()));
+                let e = anyhow::Error::from(e).context("run failed writing its records");
+                return Err(failed_early(&dir, &cfg, metrics, started, e));
             }
         };
         merge(
@@ -143,6 +145,10 @@ pub fn run(
     }
     if let Err(e) = run_dir::write_plots(&dir, &cfg) {
         tracing::warn!("could not draw the trajectory plot: {e:#}");
+        // A plot cut short (a full disk) is no plot.
+        for name in ["trajectory.svg", "trajectory.png"] {
+            let _ = std::fs::remove_file(dir.join(name));
+        }
     }
     if let Err(e) = swarmrt_analysis::series::write_all(&cfg, &dir) {
         tracing::warn!("could not write the behaviour's per-tick tables: {e:#}");
@@ -175,7 +181,10 @@ fn failed_early(
         tracing::warn!("{w:#}");
     }
     println!("{}", dir.display());
-    SwarmError::Internal(e)
+    SwarmError::Internal(anyhow::anyhow!(
+        "{e:#}; records up to the last whole tick are in {}",
+        dir.display()
+    ))
 }
 
 /// Cuts the records back to their last whole tick and returns it (0 without a whole tick,
