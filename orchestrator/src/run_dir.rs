@@ -148,6 +148,9 @@ pub fn claim(dir: &Path, force: bool) -> SwarmResult<DirLock> {
 /// user error naming the directory if another run holds it.
 pub fn lock(dir: &Path) -> SwarmResult<DirLock> {
     let shown = dir.display();
+    if dir.exists() && !dir.is_dir() {
+        return Err(SwarmError::User(format!("--out {shown}: not a directory")));
+    }
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {shown}"))?;
     let path = dir.join(LOCK_FILE);
     let mut file = std::fs::OpenOptions::new()

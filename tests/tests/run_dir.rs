@@ -107,6 +107,15 @@ fn an_existing_out_is_refused_and_left_byte_identical() {
         "keep me"
     );
 
+    // A file is no run directory.
+    let file = tmp.path().join("file");
+    std::fs::write(&file, "x").unwrap();
+    assert_refused(
+        &short_run(&file, &["--in-process", "--force"]),
+        &file,
+        "not a directory",
+    );
+
     // An empty existing directory is fine.
     let empty = tmp.path().join("empty");
     std::fs::create_dir(&empty).unwrap();
