@@ -136,8 +136,9 @@ pub fn claim(dir: &Path, force: bool) -> SwarmResult<DirLock> {
         std::fs::remove_file(&p)
             .with_context(|| format!("--force: cannot remove {}", p.display()))?;
     }
-    tracing::info!(
-        "--force: removed the earlier run's {} files from {shown}",
+    // At the default log level: the user asked to lose data, so say what went.
+    tracing::warn!(
+        "--force: removed the earlier run's {} files from {shown} ({names}{more})",
         held.len()
     );
     lock.note_holder();
