@@ -45,9 +45,14 @@ pub struct RunArgs {
     /// Override scenario.seed.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Write the run directory here instead of runs/<scenario>-s<seed>-<time>/.
+    /// Write the run directory here instead of runs/<scenario>-s<seed>-<time>/; it must be
+    /// new or empty (see --force).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Replace the earlier run in --out: its files are removed first. Only a run directory
+    /// (a config.toml, no subdirectories) is cleared, and never one a running run holds.
+    #[arg(long, requires = "out")]
+    pub force: bool,
     /// Run the same cores in this process, no IPC (identical results).
     #[arg(long)]
     pub in_process: bool,

@@ -41,11 +41,18 @@ pub fn run(
         set.push(format!("scenario.ticks={ticks}"));
     }
     let cfg = load_config(&args.config, &set)?;
-    let dir = args
-        .out
-        .clone()
-        .unwrap_or_else(|| run_dir::default_dir(&cfg));
+    // The directory is locked for the whole run (`_lock` lives until this returns): a second
+    // run into it is refused, and so is an earlier run's directory unless --force.
+    let (dir, _lock) = match &args.out {
+        Some(out) => (out.clone(), run_dir::claim(out, args.force)?),
+        None => {
+            let dir = run_dir::default_dir(&cfg)?;
+            let lock = run_dir::claim(&dir, false)?;
+            (dir, lock)
+        }
+    };
     let config_path = run_dir::prepare(&dir, &cfg)?;
+    run_dir::reserve_metrics_room(&dir, cfg.robots.count);
     let pb = progress_bar(cfg.scenario.ticks);
     let started = Instant::now();
     let mut metrics = json!({
@@ -57,13 +64,20 @@ pub fn run(
 
     let failure: Option<String>;
     if args.in_process {
-        let (world, interrupted) = swarmrt_harness::lockstep::run_recorded(
+        let (world, interrupted) = match swarmrt_harness::lockstep::run_recorded(
             &cfg,
             &dir,
             || interrupt.try_recv().is_ok(),
             |t| pb.set_position(t),
-        )
-        .map_err(anyhow::Error::from)?;
+        ) {
+            Ok(r) => r,
+            // A write failed (e.g. the disk is full): the records stop mid-tick.
+            Err(e) => {
+                pb.finish_and_clear();
+                let e = anyhow::Error::from(e).context("run failed writing its records");
+                return Err(failed_early(&dir, &cfg, metrics, started, e));
+            }
+        };
         merge(
             &mut metrics,
             serde_json::to_value(world).map_err(anyhow::Error::from)?,
@@ -76,15 +90,8 @@ pub fn run(
         {
             Ok(out) => out,
             Err(e) => {
-                // Even a run that never started leaves a metrics.json saying why.
                 pb.finish_and_clear();
-                metrics["failed"] = json!(true);
-                metrics["failure"] = json!(format!("{e:#}"));
-                metrics["ticks"] = json!(recorded_ticks(&dir));
-                metrics["wall_seconds"] = json!(started.elapsed().as_secs_f64());
-                run_dir::write_metrics(&dir, &metrics)?;
-                println!("{}", dir.display());
-                return Err(SwarmError::Internal(e));
+                return Err(failed_early(&dir, &cfg, metrics, started, e));
             }
         };
         if let Some(w) = out.world_metrics {
@@ -114,9 +121,8 @@ pub fn run(
     metrics["failed"] = json!(failure.is_some());
     if let Some(f) = &failure {
         metrics["failure"] = json!(f);
-        match run_dir::trim_torn_records(&dir, cfg.robots.count as usize) {
-            Ok(last) => metrics["ticks"] = json!(last.unwrap_or(0)),
-            Err(e) => tracing::warn!("could not trim the records: {e:#}"),
+        if let Some(last) = trimmed_ticks(&dir, &cfg) {
+            metrics["ticks"] = json!(last);
         }
     }
     // Robots whose process is gone, by the schedule or by a crash.
@@ -130,9 +136,19 @@ pub fn run(
         let events = std::fs::read_to_string(dir.join("events.jsonl")).unwrap_or_default();
         metrics["consensus"] = swarmrt_analysis::consensus_check::consensus_metrics(&events);
     }
-    run_dir::write_metrics(&dir, &metrics)?;
+    if let Err(e) = run_dir::write_metrics(&dir, &metrics) {
+        if failure.is_none() {
+            return Err(e.into());
+        }
+        // A failed run (e.g. a full disk) still reports its failure below.
+        tracing::warn!("{e:#}");
+    }
     if let Err(e) = run_dir::write_plots(&dir, &cfg) {
         tracing::warn!("could not draw the trajectory plot: {e:#}");
+        // A plot cut short (a full disk) is no plot.
+        for name in ["trajectory.svg", "trajectory.png"] {
+            let _ = std::fs::remove_file(dir.join(name));
+        }
     }
     if let Err(e) = swarmrt_analysis::series::write_all(&cfg, &dir) {
         tracing::warn!("could not write the behaviour's per-tick tables: {e:#}");
@@ -147,16 +163,43 @@ pub fn run(
     Ok(dir)
 }
 
-/// Last tick present in `trajectory.csv` (for runs whose world died).
-fn recorded_ticks(dir: &Path) -> u64 {
-    std::fs::read_to_string(dir.join("trajectory.csv"))
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .last()
-                .and_then(|l| l.split(',').next()?.parse().ok())
-        })
-        .unwrap_or(0)
+/// A run that ended without the world's final report (the supervisor failed, or an
+/// in-process write failed): trims whatever records it left to the last whole tick, and
+/// leaves a `metrics.json` saying why when there is room for one.
+fn failed_early(
+    dir: &Path,
+    cfg: &swarmrt_scenario::Config,
+    mut metrics: serde_json::Value,
+    started: Instant,
+    e: anyhow::Error,
+) -> SwarmError {
+    metrics["failed"] = json!(true);
+    metrics["failure"] = json!(format!("{e:#}"));
+    metrics["ticks"] = json!(trimmed_ticks(dir, cfg).unwrap_or(0));
+    metrics["wall_seconds"] = json!(started.elapsed().as_secs_f64());
+    if let Err(w) = run_dir::write_metrics(dir, &metrics) {
+        tracing::warn!("{w:#}");
+    }
+    println!("{}", dir.display());
+    SwarmError::Internal(anyhow::anyhow!(
+        "{e:#}; records up to the last whole tick are in {}",
+        dir.display()
+    ))
+}
+
+/// Cuts the records back to their last whole tick and returns it (0 without a whole tick,
+/// `None` if there are no records or they could not be trimmed).
+fn trimmed_ticks(dir: &Path, cfg: &swarmrt_scenario::Config) -> Option<u64> {
+    if !dir.join("trajectory.csv").exists() {
+        return None;
+    }
+    match run_dir::trim_torn_records(dir, cfg.robots.count as usize) {
+        Ok(last) => Some(last.unwrap_or(0)),
+        Err(e) => {
+            tracing::warn!("could not trim the records: {e:#}");
+            None
+        }
+    }
 }
 
 fn merge(into: &mut serde_json::Value, from: serde_json::Value) {

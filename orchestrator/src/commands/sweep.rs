@@ -83,13 +83,14 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
         configs.push(cfg);
     }
 
-    let out = args.out.clone().unwrap_or_else(|| {
-        run_dir::unused_dir(&format!(
+    let out = match args.out.clone() {
+        Some(out) => out,
+        None => run_dir::unused_dir(&format!(
             "sweeps/{}-{}",
             base.scenario.name,
             run_dir::timestamp()
-        ))
-    });
+        ))?,
+    };
     let csv_path = out.join("sweep.csv");
     check_out_dir(&out)?;
     let existing = if csv_path.exists() {

@@ -396,13 +396,14 @@ fn check(args: &TuneArgs) -> SwarmResult<Tune<'_>> {
         seeds,
         base_config: base.to_toml(),
     };
-    let out = args.out.clone().unwrap_or_else(|| {
-        run_dir::unused_dir(&format!(
+    let out = match args.out.clone() {
+        Some(out) => out,
+        None => run_dir::unused_dir(&format!(
             "runs/tune-{}-{}",
             base.scenario.name,
             run_dir::timestamp()
-        ))
-    });
+        ))?,
+    };
     Ok(Tune {
         args,
         params,

@@ -20,6 +20,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use crossbeam_channel::{Receiver, Sender};
 
 use crate::processes::child_command;
+use crate::run_dir;
 
 /// Lines of a failed run's stderr kept for the report.
 const STDERR_TAIL: usize = 12;
@@ -186,11 +187,18 @@ fn run_one(job: &Job, opts: &PoolOptions, shared: &Shared) -> Outcome {
         if let Err(e) = prepare(&job.dir, &config, &job.config_toml) {
             return Outcome::Failed {
                 metrics: None,
-                reason: format!("cannot prepare {}: {e}", job.dir.display()),
+                reason: format!("cannot prepare {}: {e:#}", job.dir.display()),
             };
         }
         let mut cmd = child_command(&opts.swarm);
-        cmd.arg("run").arg(&config).arg("--out").arg(&job.dir);
+        // The directory holds the config the child runs from (and nothing of an earlier
+        // attempt, see `prepare`), so the child needs --force; it still takes the
+        // directory's lock and is refused if another run holds it.
+        cmd.arg("run")
+            .arg(&config)
+            .arg("--out")
+            .arg(&job.dir)
+            .arg("--force");
         if opts.in_process {
             cmd.arg("--in-process");
         }
@@ -237,13 +245,23 @@ fn run_one(job: &Job, opts: &PoolOptions, shared: &Shared) -> Outcome {
     classify(&job.dir, status, signalled, &tail)
 }
 
-/// Removes what an earlier, unfinished attempt left and writes the resolved config.
-fn prepare(dir: &Path, config: &Path, toml: &str) -> std::io::Result<()> {
-    if dir.exists() {
-        std::fs::remove_dir_all(dir)?;
+/// Removes what an earlier, unfinished attempt left and writes the resolved config, under the
+/// directory's lock: a directory another run is using is refused, not cleared.
+fn prepare(dir: &Path, config: &Path, toml: &str) -> anyhow::Result<()> {
+    let _lock = run_dir::lock(dir).map_err(|e| anyhow::anyhow!("{e}"))?;
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        if entry.file_name() == run_dir::LOCK_FILE {
+            continue;
+        }
+        if entry.file_type()?.is_dir() {
+            std::fs::remove_dir_all(entry.path())?;
+        } else {
+            std::fs::remove_file(entry.path())?;
+        }
     }
-    std::fs::create_dir_all(dir)?;
-    std::fs::write(config, toml)
+    std::fs::write(config, toml)?;
+    Ok(())
 }
 
 /// Blocks until child `pid` has exited, leaving it a zombie so its pid stays reserved.

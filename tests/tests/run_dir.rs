@@ -1,0 +1,401 @@
+//! The run directory is never overwritten (issue 18): `swarm run` refuses an `--out` that holds
+//! anything unless `--force`, a run holds `DIR/.lock` for its whole life so a second run into
+//! it fails at once (with `--force` too), default directories started in the same second
+//! differ, and a full disk leaves whole ticks and a `metrics.json` saying the run failed.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use swarmrt_tests::{
+    assert_ok, children_of, last_tick, metrics, start_long_run, swarm, swarm_bin,
+    wait_with_watchdog, workspace,
+};
+
+const LIMIT: Duration = Duration::from_secs(180);
+
+/// `swarm run configs/goto_simple.toml --ticks 50 --out DIR extra...`.
+fn short_run(dir: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "run",
+        "configs/goto_simple.toml",
+        "--ticks",
+        "50",
+        "--out",
+        dir.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    swarm(&args, LIMIT)
+}
+
+/// Every file of a directory with its bytes.
+fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| {
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Asserts a user error: exit 2 and one line that names `dir` and contains `says`.
+fn assert_refused(out: &Output, dir: &Path, says: &str) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "one line: {err}");
+    assert!(
+        err.contains(dir.to_str().unwrap()),
+        "names the directory: {err}"
+    );
+    assert!(err.contains(says), "says {says:?}: {err}");
+}
+
+#[test]
+fn an_existing_out_is_refused_and_left_byte_identical() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    assert_ok(&short_run(&dir, &[]));
+    let before = snapshot(&dir);
+    assert!(before.contains_key("trajectory.csv") && before.contains_key("metrics.json"));
+
+    // Another scenario into the same directory: refused, nothing touched.
+    let out = swarm(
+        &[
+            "run",
+            "configs/formation_simple.toml",
+            "--ticks",
+            "50",
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        LIMIT,
+    );
+    assert_refused(&out, &dir, "--force");
+    assert!(out.stdout.is_empty(), "no run directory printed");
+    assert_eq!(
+        snapshot(&dir),
+        before,
+        "the earlier run's files are untouched"
+    );
+
+    // A directory that holds anything at all is refused too.
+    let other = tmp.path().join("notes");
+    std::fs::create_dir(&other).unwrap();
+    std::fs::write(other.join("todo.txt"), "keep me").unwrap();
+    assert_refused(&short_run(&other, &["--in-process"]), &other, "--force");
+    assert_eq!(
+        std::fs::read_to_string(other.join("todo.txt")).unwrap(),
+        "keep me"
+    );
+    // --force clears only a run directory (a config.toml, no subdirectories).
+    assert_refused(
+        &short_run(&other, &["--in-process", "--force"]),
+        &other,
+        "only a run directory",
+    );
+    assert_eq!(
+        std::fs::read_to_string(other.join("todo.txt")).unwrap(),
+        "keep me"
+    );
+
+    // A file is no run directory.
+    let file = tmp.path().join("file");
+    std::fs::write(&file, "x").unwrap();
+    assert_refused(
+        &short_run(&file, &["--in-process", "--force"]),
+        &file,
+        "not a directory",
+    );
+
+    // An empty existing directory is fine.
+    let empty = tmp.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    assert_ok(&short_run(&empty, &["--in-process"]));
+}
+
+#[test]
+fn force_replaces_a_finished_runs_directory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    assert_ok(&short_run(&dir, &["--seed", "3"]));
+    let first = snapshot(&dir);
+    // A stray file of the earlier run that the new one does not write must not survive.
+    std::fs::write(dir.join("formation.csv"), "stale").unwrap();
+
+    let out = short_run(&dir, &["--seed", "4", "--force"]);
+    assert_ok(&out);
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        dir.to_str().unwrap()
+    );
+    let m = metrics(&dir);
+    assert_eq!(m["seed"], 4);
+    assert_eq!(m["failed"], false);
+    assert!(
+        !dir.join("formation.csv").exists(),
+        "the earlier run's files were removed"
+    );
+    let second = snapshot(&dir);
+    assert_eq!(
+        first.keys().collect::<Vec<_>>(),
+        second.keys().collect::<Vec<_>>(),
+        "the same files, all written by the second run"
+    );
+    assert_ne!(first["config.toml"], second["config.toml"]);
+    // Exactly what a run into a fresh directory writes.
+    let fresh = tmp.path().join("fresh");
+    assert_ok(&short_run(&fresh, &["--seed", "4"]));
+    assert_eq!(
+        std::fs::read(fresh.join("trajectory.csv")).unwrap(),
+        second["trajectory.csv"]
+    );
+}
+
+#[test]
+fn a_second_run_into_a_running_runs_directory_fails_at_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let first = start_long_run(&dir, &[]);
+    let children = children_of(first.id());
+    let config = std::fs::read(dir.join("config.toml")).unwrap();
+
+    for extra in [&[][..], &["--force"][..], &["--in-process", "--force"][..]] {
+        let started = Instant::now();
+        let out = short_run(&dir, extra);
+        let took = started.elapsed();
+        assert_refused(&out, &dir, "another run is using this directory");
+        assert!(
+            stderr(&out).contains(&format!("pid {}", first.id())),
+            "names the holder: {}",
+            stderr(&out)
+        );
+        assert!(
+            took < Duration::from_secs(5),
+            "refused at once, took {took:?} ({extra:?})"
+        );
+    }
+    // The first run is untouched and still going.
+    assert_eq!(std::fs::read(dir.join("config.toml")).unwrap(), config);
+    let at = last_tick(&dir);
+    swarmrt_tests::wait_until("the first run to go on", LIMIT, || {
+        last_tick(&dir) > at + 20
+    });
+
+    // Ctrl-C (SIGINT to its pid): it stops in order and its records are whole.
+    unsafe {
+        libc::kill(first.id() as i32, libc::SIGINT);
+    }
+    let out = wait_with_watchdog(first, LIMIT);
+    assert_ok(&out);
+    let m = metrics(&dir);
+    assert_eq!(m["interrupted"], true);
+    assert_eq!(m["failed"], false);
+    assert_eq!(m["seed"], 1);
+    let csv = std::fs::read_to_string(dir.join("trajectory.csv")).unwrap();
+    let ticks = m["ticks"].as_u64().unwrap() as usize;
+    assert_eq!(
+        csv.lines().count(),
+        1 + 9 * (ticks + 1),
+        "one row per robot per tick"
+    );
+    swarmrt_tests::assert_nothing_left(&children, m["run_id"].as_str().unwrap());
+
+    // Once it has ended, the lock is free again and --force may replace it.
+    assert_ok(&short_run(&dir, &["--in-process", "--force"]));
+}
+
+#[test]
+fn two_runs_started_together_into_one_directory_cannot_both_pass() {
+    let tmp = tempfile::tempdir().unwrap();
+    for i in 0..4 {
+        let dir = tmp.path().join(format!("run{i}"));
+        let spawn = || {
+            Command::new(swarm_bin())
+                .current_dir(workspace())
+                .args([
+                    "run",
+                    "configs/goto_simple.toml",
+                    "--in-process",
+                    "--ticks",
+                    "50",
+                ])
+                .arg("--out")
+                .arg(&dir)
+                .stdin(Stdio::null())
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap()
+        };
+        let (a, b) = (spawn(), spawn());
+        let outs = [wait_with_watchdog(a, LIMIT), wait_with_watchdog(b, LIMIT)];
+        let codes: Vec<_> = outs.iter().map(|o| o.status.code()).collect();
+        let won = outs.iter().filter(|o| o.status.success()).count();
+        assert_eq!(
+            won,
+            1,
+            "exactly one run writes {}: {codes:?}",
+            dir.display()
+        );
+        let lost = outs.iter().find(|o| !o.status.success()).unwrap();
+        assert_eq!(lost.status.code(), Some(2), "{}", stderr(lost));
+        assert_eq!(metrics(&dir)["failed"], false);
+    }
+}
+
+#[test]
+fn default_directories_of_runs_started_in_the_same_second_differ() {
+    // From a scratch working directory: default run directories are relative (runs/...).
+    let tmp = tempfile::tempdir().unwrap();
+    let config = workspace().join("configs/goto_simple.toml");
+    let mut same_second = false;
+    for _ in 0..5 {
+        let spawn = || {
+            Command::new(swarm_bin())
+                .current_dir(tmp.path())
+                .args(["run", "--in-process", "--ticks", "5"])
+                .arg(&config)
+                .stdin(Stdio::null())
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap()
+        };
+        let (a, b) = (spawn(), spawn());
+        let outs = [wait_with_watchdog(a, LIMIT), wait_with_watchdog(b, LIMIT)];
+        let dirs: Vec<PathBuf> = outs
+            .iter()
+            .map(|o| {
+                assert_ok(o);
+                PathBuf::from(String::from_utf8_lossy(&o.stdout).trim())
+            })
+            .collect();
+        assert_ne!(dirs[0], dirs[1]);
+        for d in &dirs {
+            assert_eq!(
+                metrics(&tmp.path().join(d))["failed"],
+                false,
+                "{}",
+                d.display()
+            );
+        }
+        // runs/goto_simple-s1-<time> and the same with -1: started in the same second.
+        let mut names: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
+        names.sort();
+        if names[1] == format!("{}-1", names[0]) {
+            same_second = true;
+            break;
+        }
+    }
+    assert!(
+        same_second,
+        "no two runs started in the same second in 5 tries"
+    );
+}
+
+/// A tmpfs of `size` mounted on a fresh directory, unmounted on drop; `None` (with the reason
+/// printed) where mounting is not permitted.
+struct SmallDisk {
+    _tmp: tempfile::TempDir,
+    path: PathBuf,
+}
+
+impl SmallDisk {
+    fn mount(size: &str) -> Option<SmallDisk> {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = tmp.path().join("disk");
+        std::fs::create_dir(&path).unwrap();
+        let out = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .arg(&path)
+            .output();
+        match out {
+            Ok(o) if o.status.success() => Some(SmallDisk { _tmp: tmp, path }),
+            Ok(o) => {
+                eprintln!(
+                    "skipped: cannot mount a small tmpfs ({})",
+                    String::from_utf8_lossy(&o.stderr).trim()
+                );
+                None
+            }
+            Err(e) => {
+                eprintln!("skipped: cannot run mount ({e})");
+                None
+            }
+        }
+    }
+}
+
+impl Drop for SmallDisk {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg("-l").arg(&self.path).status();
+    }
+}
+
+/// The run filled the disk: exit 1, whole ticks only, `metrics.json` saying it failed.
+fn assert_failed_cleanly(out: &Output, dir: &Path, robots: usize) {
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(out));
+    let csv = std::fs::read_to_string(dir.join("trajectory.csv")).unwrap();
+    assert!(csv.ends_with('\n'), "no torn line");
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len() % robots, 0, "whole ticks only");
+    let last = last_tick(dir);
+    assert!(last > 10, "the disk filled mid-run (last tick {last})");
+    assert_eq!(rows.len(), robots * (last as usize + 1));
+    for line in std::fs::read_to_string(dir.join("events.jsonl"))
+        .unwrap()
+        .lines()
+    {
+        let v: serde_json::Value = serde_json::from_str(line).expect("whole event lines");
+        assert!(v["tick"].as_u64().is_none_or(|t| t <= last), "{line}");
+    }
+    let m = metrics(dir);
+    assert_eq!(m["failed"], true, "{m}");
+    assert_eq!(m["ticks"], last, "{m}");
+    assert!(!dir.join("metrics.json.tmp").exists());
+    assert!(
+        !dir.join(".metrics-room").exists(),
+        "the room set aside was used"
+    );
+    // A plot the full disk cut short is removed, not left torn.
+    if let Ok(svg) = std::fs::read_to_string(dir.join("trajectory.svg")) {
+        assert!(svg.trim_end().ends_with("</svg>"), "a whole plot or none");
+    }
+}
+
+#[test]
+fn a_full_disk_leaves_whole_ticks_and_a_failed_metrics_json() {
+    let Some(disk) = SmallDisk::mount("256k") else {
+        return;
+    };
+    for (name, extra) in [
+        ("processes", &[][..]),
+        ("in-process", &["--in-process"][..]),
+    ] {
+        let dir = disk.path.join(name);
+        let mut args = vec![
+            "run",
+            "configs/goto_simple.toml",
+            "--ticks",
+            "100000",
+            "--set",
+            "scenario.stop_when_done=false",
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let out = swarm(&args, LIMIT);
+        assert_failed_cleanly(&out, &dir, 9);
+        // Room for the next run.
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
