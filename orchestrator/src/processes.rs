@@ -322,7 +322,7 @@ fn supervise(
         }
     }
     // Stable storage of the robots' persistent Raft state, for restarts (`consensus.storage`).
-    let storage = dir.join("storage");
+    let storage = dir.join(crate::run_dir::STORAGE_DIR);
     let spawn_robot = |id: u32, incarnation: u32| {
         child_command(&agent_bin)
             .args([

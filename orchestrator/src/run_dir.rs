@@ -85,6 +85,10 @@ impl DirLock {
     }
 }
 
+/// The subdirectory of a run directory that holds the robots' stable storage (their
+/// persistent Raft state, `consensus.storage`).
+pub const STORAGE_DIR: &str = "storage";
+
 /// Claims `dir` for a run: creates it, takes its lock, then looks at what it holds. In this
 /// order two runs started at the same instant cannot both pass: whoever takes the lock second
 /// is refused, whether or not the first has written anything yet.
@@ -92,8 +96,8 @@ impl DirLock {
 /// - locked by another run: refused, `--force` or not (a user error naming the directory);
 /// - holding anything but the lock file: refused unless `force`;
 /// - with `force`: the earlier run's files are removed first (the lock is kept). Only a run
-///   directory is cleared: one that holds a `config.toml` and no subdirectories, so
-///   `--force --out ~` cannot wipe a home directory or a sweep.
+///   directory is cleared: one that holds a `config.toml` and no subdirectory but its own
+///   [`STORAGE_DIR`], so `--force --out ~` cannot wipe a home directory or a sweep.
 pub fn claim(dir: &Path, force: bool) -> SwarmResult<DirLock> {
     let mut lock = lock(dir)?;
     let shown = dir.display();
@@ -124,17 +128,22 @@ pub fn claim(dir: &Path, force: bool) -> SwarmResult<DirLock> {
              or pass --force to remove them and run there"
         )));
     }
-    let run_like = held.iter().any(|(n, _)| n == "config.toml") && !held.iter().any(|(_, d)| *d);
+    let run_like = held.iter().any(|(n, _)| n == "config.toml")
+        && held.iter().all(|(n, d)| !*d || n == STORAGE_DIR);
     if !run_like {
         return Err(SwarmError::User(format!(
             "--out {shown}: --force replaces only a run directory (a config.toml and no \
-             subdirectories), and this holds {names}{more}; choose another directory"
+             subdirectories but its own storage/), and this holds {names}{more}; choose another directory"
         )));
     }
-    for (name, _) in &held {
+    for (name, is_dir) in &held {
         let p = dir.join(name);
-        std::fs::remove_file(&p)
-            .with_context(|| format!("--force: cannot remove {}", p.display()))?;
+        if *is_dir {
+            std::fs::remove_dir_all(&p)
+        } else {
+            std::fs::remove_file(&p)
+        }
+        .with_context(|| format!("--force: cannot remove {}", p.display()))?;
     }
     // At the default log level: the user asked to lose data, so say what went.
     tracing::warn!(

@@ -160,6 +160,36 @@ fn force_replaces_a_finished_runs_directory() {
     );
 }
 
+/// A Raft run's directory holds its robots' stable storage (`storage/`): `--force` clears it
+/// too, so the new run's robots do not start from the old run's state.
+#[test]
+fn force_replaces_a_raft_runs_directory_with_its_storage() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("raft");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "run",
+            "configs/raft_election.toml",
+            "--ticks",
+            "60",
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        swarm(&args, LIMIT)
+    };
+    assert_ok(&run(&[]));
+    let state = dir.join("storage/raft-0.state");
+    assert!(state.exists(), "robot 0 wrote its Raft state");
+    std::fs::write(dir.join("storage/raft-99.state"), "stale").unwrap();
+    assert_ok(&run(&["--force"]));
+    assert!(state.exists());
+    assert!(
+        !dir.join("storage/raft-99.state").exists(),
+        "storage cleared"
+    );
+}
+
 #[test]
 fn a_second_run_into_a_running_runs_directory_fails_at_once() {
     let tmp = tempfile::tempdir().unwrap();
