@@ -132,6 +132,10 @@ pub struct Checker {
     committed: Vec<(u64, u32)>,
     /// First tick at which each index was committed (index - 1).
     committed_tick: Vec<u64>,
+    /// Term of the robot whose note first committed each index: a leader of term T must
+    /// hold what was committed before T (Leader Completeness), not what a later term
+    /// commits of an earlier term's entries while it is a stale leader.
+    committed_in: Vec<u64>,
     /// What some robot applied at each index.
     applied: BTreeMap<u64, (u64, u32)>,
     /// Robots that applied each index.
@@ -407,6 +411,7 @@ impl Checker {
                     } else if k == self.committed.len() {
                         self.committed.push(e);
                         self.committed_tick.push(tick);
+                        self.committed_in.push(v.term);
                     }
                 }
                 v.commit = index;
@@ -519,6 +524,12 @@ impl Checker {
                     // Committed by a later leader: not this one's business (and log terms
                     // never decrease, so neither are the entries after it).
                     break;
+                }
+                if self.committed_in[i] >= v.term {
+                    // An earlier term's entry committed in this term or later (by another
+                    // leader, while this one is stale): Raft does not promise it here.
+                    v.completeness_checked += 1;
+                    continue;
                 }
                 let held = v.log.get(i);
                 if held != Some(&(t, d)) && held != Some(&UNKNOWN) {

@@ -127,6 +127,42 @@ fn a_leader_missing_a_committed_entry_breaks_leader_completeness() {
     assert_eq!(run(&s), vec!["leader_completeness"]);
 }
 
+/// Raft's Leader Completeness covers what was committed before a leader's term. A stale
+/// leader of term 2 need not hold an entry of term 1 that the leader of term 3 commits later
+/// (found by the fuzzer, seed 47941, once crashes could land inside a tick).
+#[test]
+fn a_stale_leader_need_not_hold_what_a_later_term_commits() {
+    let s = vec![
+        (1, 0, state(1, Role::Leader, Some(0))),
+        (1, 0, app(1, 1, 0xa)),
+        // Robot 1 leads term 2 with an empty log (entry 1 was on robot 0 only) ...
+        (2, 1, state(2, Role::Candidate, Some(1))),
+        (2, 2, state(2, Role::Follower, Some(1))),
+        (3, 1, state(2, Role::Leader, Some(1))),
+        (3, 1, app(1, 2, 0xb)),
+        // ... and is cut off; robot 0 wins term 3 with robot 2's vote and commits its entry 1
+        // of term 1 through its own entry of term 3.
+        (4, 0, state(3, Role::Candidate, Some(0))),
+        (4, 2, state(3, Role::Follower, Some(0))),
+        (5, 0, state(3, Role::Leader, Some(0))),
+        (5, 0, app(2, 3, 0xc)),
+        (6, 2, app(1, 1, 0xa)),
+        (6, 2, app(2, 3, 0xc)),
+        (7, 0, N::Commit { index: 2 }),
+    ];
+    assert_eq!(run(&s), Vec::<&str>::new());
+    // The same commit in term 1, before robot 1 led term 2: a completeness violation.
+    let s = vec![
+        (1, 0, state(1, Role::Leader, Some(0))),
+        (1, 0, app(1, 1, 0xa)),
+        (1, 2, app(1, 1, 0xa)),
+        (2, 0, N::Commit { index: 1 }),
+        (3, 1, state(2, Role::Candidate, Some(1))),
+        (4, 1, state(2, Role::Leader, Some(1))),
+    ];
+    assert_eq!(run(&s), vec!["leader_completeness"]);
+}
+
 #[test]
 fn different_entries_committed_or_applied_at_one_index_break_state_machine_safety() {
     // Robot 3 has its own entry 1 (another term) and commits it.
