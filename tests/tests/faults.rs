@@ -155,6 +155,10 @@ fn processes_of(m: &serde_json::Value, robot: u64) -> Vec<(u64, String, bool)> {
         .collect()
 }
 
+/// Robot 5 restarted at tick 250, the leader of the moment at tick 400.
+const RESTARTS: &str =
+    "faults.restart=[{tick=250,robot=5,down_ticks=15},{tick=400,robot=\"leader\"}]";
+
 #[test]
 fn freezes_and_restarts_replay_bit_for_bit_with_real_processes() {
     let tmp = tempfile::tempdir().unwrap();
@@ -167,7 +171,7 @@ fn freezes_and_restarts_replay_bit_for_bit_with_real_processes() {
             "--set",
             "faults.freeze=[{robot=3,from=100,to=150}]",
             "--set",
-            "faults.restart=[{tick=250,robot=5,down_ticks=15},{tick=400,robot=\"leader\"}]",
+            RESTARTS,
         ],
     );
     let m = metrics(&p);
@@ -237,7 +241,7 @@ fn without_stable_storage_a_restarted_robot_forgets_and_the_checker_says_so() {
             "--set",
             "consensus.storage=false",
             "--set",
-            "faults.restart=[{tick=250,robot=5,down_ticks=15},{tick=400,robot=\"leader\"}]",
+            RESTARTS,
         ],
     );
     let c = &metrics(&p)["consensus"];
