@@ -4,7 +4,6 @@
 use std::path::{Path, PathBuf};
 
 use std::io::{Read, Write};
-use std::os::fd::AsRawFd;
 
 use anyhow::Context;
 use swarmrt_scenario::Config;
@@ -170,10 +169,11 @@ pub fn lock(dir: &Path) -> SwarmResult<DirLock> {
         .truncate(false)
         .open(&path)
         .with_context(|| format!("cannot open {}", path.display()))?;
-    // SAFETY: flock on a descriptor we own.
-    if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
-        let e = std::io::Error::last_os_error();
-        if e.raw_os_error() == Some(libc::EWOULDBLOCK) {
+    // std's `try_lock` is `flock(LOCK_EX | LOCK_NB)` on Linux: the kernel drops it with the
+    // last descriptor, so a crashed run leaves no stale lock.
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
             let mut holder = String::new();
             let _ = file.read_to_string(&mut holder);
             let pid = holder
@@ -186,9 +186,11 @@ pub fn lock(dir: &Path) -> SwarmResult<DirLock> {
                  or choose another directory (--force does not override this)"
             )));
         }
-        return Err(SwarmError::Internal(
-            anyhow::Error::from(e).context(format!("cannot lock {}", path.display())),
-        ));
+        Err(std::fs::TryLockError::Error(e)) => {
+            return Err(SwarmError::Internal(
+                anyhow::Error::from(e).context(format!("cannot lock {}", path.display())),
+            ));
+        }
     }
     Ok(DirLock { file })
 }
