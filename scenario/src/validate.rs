@@ -133,21 +133,19 @@ impl Config {
                 }
             }
         }
-        range_f(
+        // At most half the gap between neighbouring bodies, so robots never start overlapping
+        // (with a hair of slack so (0.3 - 0.1) / 2 admits 0.1).
+        let max_jitter = ((st.spacing - 2.0 * r.radius) / 2.0).max(0.0);
+        check(
+            st.jitter.is_finite() && st.jitter >= 0.0 && st.jitter <= max_jitter + 1e-9,
             "robots.start.jitter",
-            st.jitter,
-            0.0,
-            // A hair of slack so (0.3 - 0.1) / 2 admits 0.1.
-            ((st.spacing - 2.0 * r.radius) / 2.0).max(0.0) + 1e-9,
-        )
-        .map_err(|(k, m)| {
-            (
-                k,
-                format!(
-                    "{m} (at most (spacing - 2 * radius) / 2, so robots never start overlapping)"
-                ),
-            )
-        })?;
+            &format!(
+                "a number in [0, {}] ((spacing - 2 * radius) / 2, so robots never start \
+                 overlapping), got {}",
+                short((max_jitter * 1e9).round() / 1e9),
+                short(st.jitter)
+            ),
+        )?;
         range_f(
             "robots.start.heading_jitter_deg",
             st.heading_jitter_deg,
