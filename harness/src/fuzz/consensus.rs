@@ -340,6 +340,30 @@ fn groups(faults: &[Fault], t: u64, n: usize) -> Option<Vec<u64>> {
     any.then_some(g)
 }
 
+/// The last `last` recorded events of `events` (an `events.jsonl` text) as readable lines,
+/// `tick robot: what`, oldest first.
+pub fn timeline(events: &str, last: usize) -> Vec<String> {
+    let lines: Vec<&str> = events.lines().collect();
+    lines[lines.len().saturating_sub(last)..]
+        .iter()
+        .map(|l| match serde_json::from_str::<serde_json::Value>(l) {
+            Ok(serde_json::Value::Object(mut o)) => {
+                let tick = o.remove("tick").map(|v| v.to_string()).unwrap_or_default();
+                let robot = o.remove("robot").map(|v| v.to_string()).unwrap_or_default();
+                // `{"event":"note","note":{"consensus":X}}` reads as X.
+                let what = match (o.get("event"), o.get("note")) {
+                    (Some(e), Some(n)) if e == "note" => {
+                        n.get("consensus").unwrap_or(n).to_string()
+                    }
+                    _ => serde_json::Value::Object(o).to_string(),
+                };
+                format!("{tick:>6} r{robot:<3} {what}")
+            }
+            _ => (*l).to_string(),
+        })
+        .collect()
+}
+
 /// Whether `raft` has applied scheduled decision `id`.
 pub fn applied_decision(raft: &Raft, id: u16) -> bool {
     (1..=raft.applied()).any(|i| {
