@@ -208,6 +208,11 @@ pub struct ConsensusArgs {
     /// Write each failing seed's note stream to DIR/seed-<S>.events.jsonl.
     #[arg(long, value_name = "DIR")]
     pub dump: Option<PathBuf>,
+    /// Run a known bug of the Raft core instead of the real one (vote-for-anyone,
+    /// no-up-to-date-check, keep-conflicting-entries, commit-earlier-term,
+    /// forget-vote-on-restart, accept-stale-append, no-step-down, apply-before-commit).
+    #[arg(long, value_name = "NAME")]
+    pub mutant: Option<String>,
 }
 
 /// `swarm fuzz election`.

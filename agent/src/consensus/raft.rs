@@ -25,6 +25,78 @@ use swarmrt_protocol::{BROADCAST, MAX_PAYLOAD};
 use super::log::Log;
 use super::{Notes, Rng};
 
+/// Known bugs the fuzzer must catch (issue 18). Compiled only with the `mutants` feature, and
+/// even then inert: a mutant is active only on the thread that selected it with
+/// [`set_mutant`], which only `swarm fuzz consensus --mutant` and the harness tests call.
+#[cfg(feature = "mutants")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mutant {
+    /// Grant every vote request (no one-vote-per-term).
+    VoteForAnyone,
+    /// Grant (pre-)votes without the up-to-date check (section 5.4.1).
+    NoUpToDateCheck,
+    /// A follower keeps a conflicting entry instead of truncating (Figure 2, step 3).
+    KeepConflictingEntries,
+    /// Commit entries of earlier terms by counting replicas (Figure 8).
+    CommitEarlierTerm,
+    /// A restart restores everything but the vote.
+    ForgetVoteOnRestart,
+    /// Accept AppendEntries from a stale term.
+    AcceptStaleAppend,
+    /// A leader adopts a higher term but keeps leading.
+    NoStepDown,
+    /// Apply entries before they are committed.
+    ApplyBeforeCommit,
+}
+
+#[cfg(feature = "mutants")]
+impl Mutant {
+    /// Every mutant, with its command-line name.
+    pub const ALL: [(&'static str, Mutant); 8] = [
+        ("vote-for-anyone", Mutant::VoteForAnyone),
+        ("no-up-to-date-check", Mutant::NoUpToDateCheck),
+        ("keep-conflicting-entries", Mutant::KeepConflictingEntries),
+        ("commit-earlier-term", Mutant::CommitEarlierTerm),
+        ("forget-vote-on-restart", Mutant::ForgetVoteOnRestart),
+        ("accept-stale-append", Mutant::AcceptStaleAppend),
+        ("no-step-down", Mutant::NoStepDown),
+        ("apply-before-commit", Mutant::ApplyBeforeCommit),
+    ];
+
+    /// The mutant called `name`.
+    pub fn parse(name: &str) -> Option<Mutant> {
+        Mutant::ALL
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|&(_, m)| m)
+    }
+}
+
+#[cfg(feature = "mutants")]
+thread_local! {
+    static MUTANT: std::cell::Cell<Option<Mutant>> = const { std::cell::Cell::new(None) };
+}
+
+/// Selects the mutant of every core on this thread (`None`: the real core).
+#[cfg(feature = "mutants")]
+pub fn set_mutant(m: Option<Mutant>) {
+    MUTANT.with(|c| c.set(m));
+}
+
+#[cfg(feature = "mutants")]
+macro_rules! mutant {
+    ($m:ident) => {
+        MUTANT.with(|c| c.get()) == Some(Mutant::$m)
+    };
+}
+
+#[cfg(not(feature = "mutants"))]
+macro_rules! mutant {
+    ($m:ident) => {
+        false
+    };
+}
+
 /// Timing and membership.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RaftParams {
@@ -138,7 +210,11 @@ impl Raft {
             id,
             p,
             term: s.term,
-            vote: s.vote,
+            vote: if mutant!(ForgetVoteOnRestart) {
+                None
+            } else {
+                s.vote
+            },
             log: s.log,
             commit,
             applied: 0,
@@ -253,7 +329,8 @@ impl Raft {
 
     /// Candidate's log at least as up-to-date as ours (section 5.4.1).
     fn up_to_date(&self, last_index: u64, last_term: u64) -> bool {
-        (last_term, last_index) >= (self.log.last_term(), self.log.last_index())
+        mutant!(NoUpToDateCheck)
+            || (last_term, last_index) >= (self.log.last_term(), self.log.last_index())
     }
 
     fn send(&mut self, to: u32, m: ConsensusMsg) {
@@ -452,7 +529,7 @@ impl Raft {
         m[self.id as usize] = self.log.last_index();
         m.sort_unstable_by(|a, b| b.cmp(a));
         let n = m[self.quorum() - 1];
-        if n > self.commit && self.log.term(n) == Some(self.term) {
+        if n > self.commit && (self.log.term(n) == Some(self.term) || mutant!(CommitEarlierTerm)) {
             self.commit = n;
             notes.push(ConsensusNote::Commit { index: n });
         }
@@ -522,7 +599,10 @@ impl Raft {
 
     fn step_inner(&mut self, from: u32, msg: &ConsensusMsg, notes: &mut Notes) {
         let mterm = msg_term(msg);
-        if mterm > self.term {
+        if mterm > self.term && self.role == Role::Leader && mutant!(NoStepDown) {
+            self.term = mterm;
+            self.vote = None;
+        } else if mterm > self.term {
             match msg {
                 ConsensusMsg::PreVote { .. } | ConsensusMsg::Vote { .. } if self.in_lease() => {
                     return;
@@ -534,7 +614,9 @@ impl Raft {
                 ConsensusMsg::Append { .. } => self.become_follower(mterm, Some(from)),
                 _ => self.become_follower(mterm, None),
             }
-        } else if mterm < self.term {
+        } else if mterm < self.term
+            && !(mutant!(AcceptStaleAppend) && matches!(msg, ConsensusMsg::Append { .. }))
+        {
             // Stale sender: tell it our term so it steps down (section 5.1).
             let t = self.term;
             match msg {
@@ -588,8 +670,9 @@ impl Raft {
                 last_term,
                 ..
             } => {
-                let can_vote =
-                    self.vote == Some(from) || (self.vote.is_none() && self.leader.is_none());
+                let can_vote = self.vote == Some(from)
+                    || (self.vote.is_none() && self.leader.is_none())
+                    || mutant!(VoteForAnyone);
                 let grant = can_vote && self.up_to_date(last_index, last_term);
                 if grant {
                     self.vote = Some(from);
@@ -727,6 +810,7 @@ impl Raft {
             let index = prev_index + 1 + k as u64;
             match self.log.term(index) {
                 Some(t) if t == e.term => continue,
+                Some(_) if mutant!(KeepConflictingEntries) => continue,
                 Some(_) => {
                     // Step 3: a conflicting entry and all that follow it go.
                     self.log.truncate_from(index);
@@ -792,7 +876,12 @@ impl Raft {
 
     /// The next committed entry to act on, if any and if its note fits.
     pub fn next_apply(&mut self, notes: &mut Notes) -> Option<Entry> {
-        if self.applied >= self.commit {
+        let upto = if mutant!(ApplyBeforeCommit) {
+            self.log.last_index()
+        } else {
+            self.commit
+        };
+        if self.applied >= upto {
             return None;
         }
         let index = self.applied + 1;

@@ -17,7 +17,7 @@
 //!
 //! A `Boot` note restarts a robot's view: with its persistent state (term, vote, log, commit)
 //! intact the view carries on; a restart that lost state ("amnesia": lower term, shorter log
-//! or commit than recorded) is counted, not reported as a violation by itself, because Raft
+//! or commit than recorded, or the vote of the recorded term) is counted, not reported as a violation by itself, because Raft
 //! assumes stable storage; what it then breaks (two leaders in a term, ...) is reported. A
 //! robot whose notes stop because it died is simply no longer checked.
 
@@ -237,7 +237,10 @@ impl Checker {
                 commit,
             } => {
                 let len = v.log.len() as u64;
-                if term < v.term || last_index < len || commit < v.commit {
+                // A vote of the recorded term must survive too (Figure 2: votedFor is
+                // persistent), or the robot can vote twice in that term.
+                let lost_vote = term == v.term && v.vote.is_some() && vote != v.vote;
+                if term < v.term || last_index < len || commit < v.commit || lost_vote {
                     self.amnesia += 1;
                 }
                 v.log.truncate(last_index.min(len) as usize);

@@ -45,6 +45,14 @@ pub enum Fault {
         /// Tick of the restart (at the latest the heal).
         restart: u64,
     },
+    /// Whoever leads at `from` is cut off from all others until `to` (a stale leader that
+    /// keeps leading alone, then comes back).
+    IsolateLeader {
+        /// First tick.
+        from: u64,
+        /// First tick healed.
+        to: u64,
+    },
 }
 
 /// One drawn case.
@@ -198,6 +206,7 @@ pub fn draw(seed: u64) -> Case {
             }
         }
     }
+    shapes(seed, &mut cfg, &mut faults, heal, (min, max, rtt));
     // Liveness: enough for several elections under loss, with the round trips of the delay.
     let bound = 30 * (max as u64 + rtt as u64) + 300;
     Case {
@@ -206,6 +215,67 @@ pub fn draw(seed: u64) -> Case {
         faults,
         heal,
         bound,
+    }
+}
+
+/// Fault shapes aimed at the textbook Raft bugs (docs/consensus.md, "Mutants"), drawn from a
+/// stream of their own and appended after the faults above, so those draws stay as they were
+/// (a seed's base case is unchanged; about two thirds of the seeds get extra faults):
+/// - leader churn: the leader crashes a few times in a row, each time right after a proposal
+///   (its entry on a minority at most), restarts soon, and sometimes a voter crashes and
+///   restarts during the election that follows (Figure 8; votes across restarts);
+/// - a stale leader: the leader of a moment is cut off alone while a proposal arrives, and
+///   comes back after the others elected a new one (stale terms, conflicting entries).
+fn shapes(seed: u64, cfg: &mut Config, faults: &mut Vec<Fault>, heal: u64, t: (u32, u32, u32)) {
+    let (min, max, rtt) = (t.0 as u64, t.1 as u64, t.2 as u64);
+    let n = cfg.robots.count;
+    let mut rng = stream(seed, "shape", 0);
+    let mut extra: Vec<u64> = Vec::new();
+    if rng.random_bool(0.5) {
+        let mut at = rng.random_range(0..heal);
+        for _ in 0..rng.random_range(2..=6) {
+            at += rng.random_range(max..=3 * max + rtt);
+            if at >= heal {
+                break;
+            }
+            extra.push(at.saturating_sub(rng.random_range(0..=rtt + 1)));
+            faults.push(Fault::Crash {
+                at,
+                robot: rng.random_range(0..n),
+                leader: true,
+                restart: (at + rng.random_range(1..=max)).min(heal),
+            });
+            if rng.random_bool(0.5) {
+                let v = at + rng.random_range(min..=max + rtt);
+                if v < heal {
+                    faults.push(Fault::Crash {
+                        at: v,
+                        robot: rng.random_range(0..n),
+                        leader: false,
+                        restart: (v + rng.random_range(1..=rtt + 2)).min(heal),
+                    });
+                }
+            }
+        }
+    }
+    if rng.random_bool(0.3) {
+        let from = rng.random_range(0..heal);
+        let to = (from + rng.random_range(min..=2 * max + rtt)).min(heal);
+        extra.push(from + rng.random_range(1..=rtt + 1));
+        faults.push(Fault::IsolateLeader { from, to });
+    }
+    if let Some(c) = cfg.consensus.as_mut() {
+        // Before the last proposal (the one at the heal that liveness waits for).
+        let last = c.propose.pop();
+        let k0 = c.propose.len();
+        for (j, tick) in extra.into_iter().filter(|&t| t < heal).enumerate() {
+            c.propose.push(Proposal {
+                tick,
+                goal: Some([(k0 + j) as f64, 1.0]),
+                speed: None,
+            });
+        }
+        c.propose.extend(last);
     }
 }
 
@@ -237,6 +307,7 @@ pub fn run(case: &Case, record: bool) -> Outcome {
         .as_ref()
         .map_or(0, |c| c.propose.len().saturating_sub(1)) as u16;
     let mut crashed_by: Vec<Option<usize>> = vec![None; n];
+    let mut isolated: Vec<Option<u32>> = vec![None; case.faults.len()];
     let end = case.heal + case.bound;
     let mut recovered_after = None;
     let mut failures = Vec::new();
@@ -244,6 +315,11 @@ pub fn run(case: &Case, record: bool) -> Outcome {
         let t = sim.tick();
         // Faults take effect at the tick boundary, in the order drawn.
         for (k, f) in case.faults.iter().enumerate() {
+            if let Fault::IsolateLeader { from, .. } = f
+                && *from == t
+            {
+                isolated[k] = sim.leader();
+            }
             if let Fault::Crash {
                 at,
                 robot,
@@ -277,7 +353,7 @@ pub fn run(case: &Case, record: bool) -> Outcome {
                 }
             }
         }
-        sim.step(groups(&case.faults, t, n));
+        sim.step(groups(&case.faults, &isolated, t, n));
         if !sim.checker().violations().is_empty() {
             break;
         }
@@ -324,20 +400,52 @@ pub fn run(case: &Case, record: bool) -> Outcome {
 
 /// Radio groups at tick `t`: one bit per active partition, so two robots are apart when any
 /// active partition puts them on different sides.
-fn groups(faults: &[Fault], t: u64, n: usize) -> Option<Vec<u64>> {
+/// `isolated[k]` is the robot fault `k` cut off, for [`Fault::IsolateLeader`].
+fn groups(faults: &[Fault], isolated: &[Option<u32>], t: u64, n: usize) -> Option<Vec<u64>> {
     let mut g = vec![0u64; n];
     let mut any = false;
     for (bit, f) in faults.iter().enumerate() {
-        if let Fault::Partition { from, to, side } = f
-            && (*from..*to).contains(&t)
-        {
-            any = true;
-            for (r, s) in side.iter().enumerate() {
-                g[r] |= (*s as u64) << bit;
+        match f {
+            Fault::Partition { from, to, side } if (*from..*to).contains(&t) => {
+                any = true;
+                for (r, s) in side.iter().enumerate() {
+                    g[r] |= (*s as u64) << bit;
+                }
             }
+            Fault::IsolateLeader { from, to } if (*from..*to).contains(&t) => {
+                if let Some(l) = isolated[bit] {
+                    any = true;
+                    g[l as usize] |= 1 << bit;
+                }
+            }
+            _ => {}
         }
     }
     any.then_some(g)
+}
+
+/// The last `last` recorded events of `events` (an `events.jsonl` text) as readable lines,
+/// `tick robot: what`, oldest first.
+pub fn timeline(events: &str, last: usize) -> Vec<String> {
+    let lines: Vec<&str> = events.lines().collect();
+    lines[lines.len().saturating_sub(last)..]
+        .iter()
+        .map(|l| match serde_json::from_str::<serde_json::Value>(l) {
+            Ok(serde_json::Value::Object(mut o)) => {
+                let tick = o.remove("tick").map(|v| v.to_string()).unwrap_or_default();
+                let robot = o.remove("robot").map(|v| v.to_string()).unwrap_or_default();
+                // `{"event":"note","note":{"consensus":X}}` reads as X.
+                let what = match (o.get("event"), o.get("note")) {
+                    (Some(e), Some(n)) if e == "note" => {
+                        n.get("consensus").unwrap_or(n).to_string()
+                    }
+                    _ => serde_json::Value::Object(o).to_string(),
+                };
+                format!("{tick:>6} r{robot:<3} {what}")
+            }
+            _ => (*l).to_string(),
+        })
+        .collect()
 }
 
 /// Whether `raft` has applied scheduled decision `id`.

@@ -8,6 +8,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::cli::{ConsensusArgs, ElectionArgs, FuzzCmd, QuadrantArgs};
 use crate::error::{SwarmError, SwarmResult};
+use swarmrt_agent::consensus::raft::{Mutant, set_mutant};
 use swarmrt_harness::fuzz::{consensus, election, quadrant};
 
 fn progress(total: u64) -> ProgressBar {
@@ -61,6 +62,18 @@ fn fuzz_consensus(a: &ConsensusArgs) -> SwarmResult<()> {
         std::fs::create_dir_all(d)
             .map_err(|e| user(format!("--dump {}: cannot create: {e}", d.display())))?;
     }
+    let mutant = match &a.mutant {
+        None => None,
+        Some(name) => Some(Mutant::parse(name).ok_or_else(|| {
+            let names: Vec<&str> = Mutant::ALL.iter().map(|(n, _)| *n).collect();
+            user(format!(
+                "--mutant {name}: expected one of {}",
+                names.join(", ")
+            ))
+        })?),
+    };
+    // Only this thread runs the cores, so the mutant reaches them all and nothing else.
+    set_mutant(mutant);
     let started = Instant::now();
     let pb = progress(a.seeds);
     let mut failed: Vec<u64> = Vec::new();
@@ -99,10 +112,30 @@ fn fuzz_consensus(a: &ConsensusArgs) -> SwarmResult<()> {
                 for f in &out.failures {
                     println!("  {f}");
                 }
+                let m = a
+                    .mutant
+                    .as_ref()
+                    .map(|m| format!(" --mutant {m}"))
+                    .unwrap_or_default();
                 println!(
-                    "  reproduce: swarm fuzz consensus --seeds 1 --start-seed {seed} --verbose"
+                    "  reproduce: swarm fuzz consensus --seeds 1 --start-seed {seed}{m} --verbose"
                 );
             });
+            // The seed replays to the same notes: record them and show the last ones.
+            let rec = if out.events.is_some() {
+                out.clone()
+            } else {
+                consensus::run(&case, true)
+            };
+            if let Some(ev) = &rec.events {
+                let t = consensus::timeline(ev, 30);
+                pb.suspend(|| {
+                    println!("  last notes before the violation (tick robot: note):");
+                    for l in &t {
+                        println!("    {l}");
+                    }
+                });
+            }
             if let (Some(dir), Some(ev)) = (&a.dump, &out.events) {
                 let p = dir.join(format!("seed-{seed}.events.jsonl"));
                 std::fs::write(&p, ev)?;
