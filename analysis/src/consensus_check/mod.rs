@@ -236,18 +236,22 @@ impl Checker {
                 last_index,
                 commit,
             } => {
-                let len = v.log.len() as u64;
                 // A vote of the recorded term must survive too (Figure 2: votedFor is
                 // persistent), or the robot can vote twice in that term.
                 let lost_vote = term == v.term && v.vote.is_some() && vote != v.vote;
-                if term < v.term || last_index < len || commit < v.commit || lost_vote {
+                // Its committed entries must be there; past them its log may legally differ
+                // from the record (below).
+                if term < v.term || last_index < v.commit || commit < v.commit || lost_vote {
                     self.amnesia += 1;
                 }
-                v.log.truncate(last_index.min(len) as usize);
+                // A robot can make its state durable and die before that tick's command (and
+                // notes) leaves: write-ahead allows it. So past what the record saw committed,
+                // its log may hold entries the record never saw, above or below the recorded
+                // length (a truncation and new appends). Those are unknown here and stay
+                // unchecked until overwritten; the committed prefix is checked as before.
+                let known = v.commit.min(last_index) as usize;
+                v.log.truncate(known.min(v.log.len()));
                 v.chain.truncate(v.log.len() + 1);
-                // A boot ahead of the record is a robot that made its state durable and died
-                // before that tick's command (and notes) left: write-ahead allows it. Its
-                // extra entries are unknown here and stay unchecked until overwritten.
                 while (v.log.len() as u64) < last_index {
                     push_entry(v, UNKNOWN);
                 }
