@@ -189,6 +189,11 @@ pub struct StartLayout {
     /// Each robot's heading is off by up to this many degrees (uniform from the seed).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub heading_jitter_deg: f64,
+    /// Random placement instead of the grid: each group's robots are drawn uniformly (from
+    /// the seed's `start_scatter` stream) in a disc of this radius around the group's centre,
+    /// at least `spacing` apart, and no three of a group on one line (seed 001 assumes it).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub scatter: f64,
 }
 
 /// One start group: the centre of its grid and its robots' heading.
@@ -202,6 +207,10 @@ pub struct StartGroup {
     /// Heading of its robots in degrees (default: `robots.start.heading_deg`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub heading_deg: Option<f64>,
+    /// `[x, y]`: this group's own goal (a goal of its own colour: its robots' goal sensor sees
+    /// only it, and only it counts as reached); default `map.goal`. Radius: `map.goal.radius`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub goal: Option<[f64; 2]>,
 }
 
 impl Default for StartLayout {
@@ -214,6 +223,7 @@ impl Default for StartLayout {
             groups: Vec::new(),
             jitter: 0.0,
             heading_jitter_deg: 0.0,
+            scatter: 0.0,
         }
     }
 }
@@ -295,6 +305,14 @@ pub struct GoalSensorConfig {
     pub range: f64,
     /// Cone width in degrees, centred on the heading.
     pub fov_deg: f64,
+    /// Obstacles hide the goal (a camera cannot see through walls): the goal is seen only when
+    /// the line from the robot to the goal's edge is clear of the map.
+    #[serde(skip_serializing_if = "is_false")]
+    pub occlusion: bool,
+}
+
+fn is_false(v: &bool) -> bool {
+    !*v
 }
 
 impl Default for GoalSensorConfig {
@@ -302,6 +320,7 @@ impl Default for GoalSensorConfig {
         GoalSensorConfig {
             range: 1000.0,
             fov_deg: 360.0,
+            occlusion: false,
         }
     }
 }

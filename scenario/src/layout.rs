@@ -27,18 +27,26 @@ impl Config {
             let (centre, _) = self.start_group_centre(g);
             let taken = poses.clone();
             let min_gap = r.start.spacing * 0.999;
+            let ok = |x: f64, y: f64| {
+                clear(x, y)
+                    && taken
+                        .iter()
+                        .all(|p| (p.0 - x).powi(2) + (p.1 - y).powi(2) >= min_gap * min_gap)
+            };
+            if r.start.scatter > 0.0 {
+                let mut rng = crate::rng::stream(self.scenario.seed, "start_scatter", g as u64);
+                let points = self.scatter(members, centre, &mut rng, &ok)?;
+                let heading = self.nominal_heading(poses.len() as u32);
+                poses.extend(points.into_iter().map(|(x, y)| (x, y, heading)));
+                continue;
+            }
             let points = nearest_grid_points(
                 members,
                 centre,
                 r.start.spacing,
                 self.map.bounds,
                 r.radius,
-                |x, y| {
-                    clear(x, y)
-                        && taken
-                            .iter()
-                            .all(|p| (p.0 - x).powi(2) + (p.1 - y).powi(2) >= min_gap * min_gap)
-                },
+                ok,
             )?;
             let heading = self.nominal_heading(poses.len() as u32);
             poses.extend(points.into_iter().map(|(x, y)| (x, y, heading)));
@@ -89,6 +97,74 @@ impl Config {
     pub fn nominal_heading(&self, id: u32) -> f64 {
         let (_, heading) = self.start_group_centre(self.start_group(id));
         crate::wrap_angle(heading.to_radians())
+    }
+
+    /// The goal robot `id` seeks: its start group's own `goal`, else `map.goal`.
+    pub fn goal_of(&self, id: u32) -> crate::Goal {
+        let g = self.map.goal;
+        match self
+            .robots
+            .start
+            .groups
+            .get(self.start_group(id))
+            .and_then(|s| s.goal)
+        {
+            Some([x, y]) => crate::Goal { x, y, ..g },
+            None => g,
+        }
+    }
+
+    /// Every goal of the run: `map.goal` (when some robot seeks it) and each group's own.
+    pub fn goals(&self) -> Vec<crate::Goal> {
+        let mut out: Vec<crate::Goal> = Vec::new();
+        for id in 0..self.robots.count.max(1) {
+            let g = self.goal_of(id);
+            if !out.contains(&g) {
+                out.push(g);
+            }
+        }
+        out
+    }
+
+    /// `n` points drawn uniformly in the disc of `robots.start.scatter` around `centre`, inside
+    /// the bounds, accepted by `ok`, `spacing` apart and no three within [`MIN_TRIANGLE_HEIGHT`]
+    /// of one line; each point gets up to 10,000 draws. `None` when the disc has no room.
+    fn scatter(
+        &self,
+        n: usize,
+        centre: (f64, f64),
+        rng: &mut crate::rng::Rng,
+        ok: &impl Fn(f64, f64) -> bool,
+    ) -> Option<Vec<(f64, f64)>> {
+        use rand::Rng as _;
+        let (radius, gap) = (self.robots.start.scatter, self.robots.start.spacing);
+        let mut out: Vec<(f64, f64)> = Vec::with_capacity(n);
+        for _ in 0..n {
+            let mut placed = false;
+            for _ in 0..10_000 {
+                let (d, a) = (
+                    radius * rng.random::<f64>().sqrt(),
+                    rng.random_range(-std::f64::consts::PI..std::f64::consts::PI),
+                );
+                let (x, y) = (centre.0 + d * a.cos(), centre.1 + d * a.sin());
+                let apart = out
+                    .iter()
+                    .all(|p| (p.0 - x).powi(2) + (p.1 - y).powi(2) >= gap * gap);
+                if apart
+                    && self.inside_bounds(x, y, self.robots.radius)
+                    && ok(x, y)
+                    && !collinear_with(&out, (x, y))
+                {
+                    out.push((x, y));
+                    placed = true;
+                    break;
+                }
+            }
+            if !placed {
+                return None;
+            }
+        }
+        Some(out)
     }
 
     /// Centre and heading (degrees) of start group `g`.
@@ -156,4 +232,23 @@ pub fn nearest_grid_points(
         }
     }
     None
+}
+
+/// Metres a third robot must lie off the line through two others for the three not to count
+/// as "on one line" (seed 001's leader choice assumes no three robots start collinear).
+pub const MIN_TRIANGLE_HEIGHT: f64 = 0.05;
+
+/// True when `p` lies within [`MIN_TRIANGLE_HEIGHT`] of the line through some two of `pts`.
+pub fn collinear_with(pts: &[(f64, f64)], p: (f64, f64)) -> bool {
+    for (i, a) in pts.iter().enumerate() {
+        for b in &pts[i + 1..] {
+            let (ux, uy) = (b.0 - a.0, b.1 - a.1);
+            let len = (ux * ux + uy * uy).sqrt();
+            if len > 0.0 && ((p.0 - a.0) * uy - (p.1 - a.1) * ux).abs() / len < MIN_TRIANGLE_HEIGHT
+            {
+                return true;
+            }
+        }
+    }
+    false
 }

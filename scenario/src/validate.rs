@@ -131,6 +131,20 @@ impl Config {
                 if let Some(h) = g.heading_deg {
                     finite(&format!("robots.start.groups[{i}].heading_deg"), h)?;
                 }
+                if let Some([x, y]) = g.goal {
+                    let key = format!("robots.start.groups[{i}].goal");
+                    finite(&key, x)?;
+                    finite(&key, y)?;
+                    check(
+                        self.inside_bounds(x, y, 0.0),
+                        &key,
+                        &format!(
+                            "a point inside map.bounds, got [{}, {}]",
+                            short(x),
+                            short(y)
+                        ),
+                    )?;
+                }
             }
         }
         // At most half the gap between neighbouring bodies, so robots never start overlapping
@@ -146,6 +160,7 @@ impl Config {
                 short(st.jitter)
             ),
         )?;
+        range_f("robots.start.scatter", st.scatter, 0.0, MAX_COORD)?;
         range_f(
             "robots.start.heading_jitter_deg",
             st.heading_jitter_deg,

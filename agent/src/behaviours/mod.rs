@@ -11,4 +11,5 @@ crate::registry::behaviours! {
     Goto => goto::Goto,
     Formation => formation::Formation,
     Flocking => flocking::Flocking,
+    Grouping => grouping::Grouping,
 }

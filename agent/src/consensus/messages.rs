@@ -144,13 +144,16 @@ pub enum ConsensusMsg {
         /// The sender's seeded tie-break draw.
         draw: u32,
     },
-    /// Quadrant leader choice: "I am the leader of my group", repeated so that ties are made
-    /// final over the radio.
+    /// Quadrant leader choice: "the best claim I know of is robot `leader`'s", its own or
+    /// relayed from a group member, repeated so that the best claim floods the whole group
+    /// (members that do not sense each other included) and ties are made final over the radio.
     QuadLeader {
-        /// The leader's score.
+        /// That robot's score.
         score: u8,
-        /// The leader's tie-break draw.
+        /// Its tie-break draw.
         draw: u32,
+        /// The robot that made the claim.
+        leader: u32,
     },
 }
 

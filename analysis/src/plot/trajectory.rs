@@ -121,9 +121,10 @@ fn content_box(cfg: &Config, tracks: &[RobotTrack]) -> BBox {
     let [x0, y0, x1, y1] = map.bounds;
     b.add(x0, y0);
     b.add(x1, y1);
-    let g = map.goal;
-    b.add(g.x - g.radius.abs(), g.y - g.radius.abs());
-    b.add(g.x + g.radius.abs(), g.y + g.radius.abs());
+    for g in cfg.goals() {
+        b.add(g.x - g.radius.abs(), g.y - g.radius.abs());
+        b.add(g.x + g.radius.abs(), g.y + g.radius.abs());
+    }
     for c in &map.circles {
         b.add(c.x - c.r.abs(), c.y - c.r.abs());
         b.add(c.x + c.r.abs(), c.y + c.r.abs());
@@ -453,9 +454,13 @@ fn draw_figure<DB: DrawingBackend>(
     let px = |metres: f64, lo: f64, hi: f64| (metres.abs() * lay.scale).clamp(lo, hi);
 
     // Goal (under everything), obstacles, then the arena walls.
-    let goal_ring = circle_points(map.goal.x, map.goal.y, map.goal.radius.abs());
-    area.draw(&Polygon::new(goal_ring.clone(), GOAL.mix(0.12).filled()))
-        .map_err(draw_err("trajectory plot: goal"))?;
+    let mut goal_rings = Vec::new();
+    for g in cfg.goals() {
+        let ring = circle_points(g.x, g.y, g.radius.abs());
+        area.draw(&Polygon::new(ring.clone(), GOAL.mix(0.12).filled()))
+            .map_err(draw_err("trajectory plot: goal"))?;
+        goal_rings.push(ring);
+    }
     for c in &map.circles {
         let ring = circle_points(c.x, c.y, c.r.abs());
         area.draw(&Polygon::new(ring.clone(), OBSTACLE_FILL.filled()))
@@ -484,8 +489,10 @@ fn draw_figure<DB: DrawingBackend>(
     let frame = vec![(bx0, by0), (bx1, by0), (bx1, by1), (bx0, by1), (bx0, by0)];
     area.draw(&PathElement::new(frame, BLACK.stroke_width(2)))
         .map_err(draw_err("trajectory plot: bounds"))?;
-    area.draw(&PathElement::new(goal_ring, GOAL.stroke_width(2)))
-        .map_err(draw_err("trajectory plot: goal"))?;
+    for ring in goal_rings {
+        area.draw(&PathElement::new(ring, GOAL.stroke_width(2)))
+            .map_err(draw_err("trajectory plot: goal"))?;
+    }
 
     // Paths first, markers on top of all paths.
     let line_w = if tracks.len() <= 30 { 2 } else { 1 };

@@ -59,7 +59,7 @@ impl World {
             radius,
             reach,
             noise: self.cfg.robots.noise,
-            goal: self.cfg.map.goal,
+            cfg: &self.cfg,
             goal_sensor: self.cfg.robots.goal_sensor,
         };
         let rngs = &mut self.sensor_rng[..];
@@ -92,8 +92,8 @@ impl World {
 
     /// Notes every active robot that entered the goal radius for the first time.
     pub(super) fn check_goal(&mut self) {
-        let g = self.cfg.map.goal;
         for r in &mut self.robots {
+            let g = self.cfg.goal_of(r.id);
             if r.reached_tick.is_none()
                 && r.state == RobotState::Active
                 && (r.x - g.x).powi(2) + (r.y - g.y).powi(2) <= g.radius * g.radius
@@ -137,7 +137,8 @@ struct ObserveCtx<'a> {
     radius: f64,
     reach: f64,
     noise: swarmrt_scenario::NoiseConfig,
-    goal: swarmrt_scenario::Goal,
+    /// For each robot's goal ([`swarmrt_scenario::Config::goal_of`]).
+    cfg: &'a swarmrt_scenario::Config,
     goal_sensor: swarmrt_scenario::GoalSensorConfig,
 }
 
@@ -159,7 +160,8 @@ impl ObserveCtx<'_> {
         near: &mut Vec<(f64, u32)>,
     ) {
         let (lidar, rb_range, radius, reach) = (self.lidar, self.rb_range, self.radius, self.reach);
-        let (noise, goal, goal_sensor) = (self.noise, self.goal, self.goal_sensor);
+        let (noise, goal_sensor) = (self.noise, self.goal_sensor);
+        let goal = self.cfg.goal_of(i as u32);
         let r = &self.robots[i];
         *o = Observation::empty(i as u32, self.tick);
         o.state = r.state as u8;
@@ -229,7 +231,16 @@ impl ObserveCtx<'_> {
         o.neighbours_len = seen as u16;
         let gd = ((goal.x - r.x).powi(2) + (goal.y - r.y).powi(2)).sqrt();
         let gb = wrap_angle((goal.y - r.y).atan2(goal.x - r.x) - r.theta);
-        if gd <= goal_sensor.range && gb.abs() <= goal_sensor.fov_deg.to_radians() / 2.0 {
+        // With occlusion, the goal hides behind any obstacle between the robot and its edge.
+        let hidden = || {
+            let edge = (gd - goal.radius).max(0.0);
+            let angle = (goal.y - r.y).atan2(goal.x - r.x);
+            edge > 0.0 && self.map.cast((r.x, r.y), angle, edge).is_some()
+        };
+        if gd <= goal_sensor.range
+            && gb.abs() <= goal_sensor.fov_deg.to_radians() / 2.0
+            && !(goal_sensor.occlusion && hidden())
+        {
             o.goal_visible = 1;
             o.goal_range = gd;
             o.goal_bearing = gb;

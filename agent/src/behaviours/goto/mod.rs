@@ -55,7 +55,7 @@ const AHEAD: f64 = 70.0 * PI / 180.0;
 impl Goto {
     /// Robot `id`'s behaviour for this scenario.
     pub fn new(cfg: &Config, params: &GotoParams, id: u32) -> Goto {
-        let g = cfg.map.goal;
+        let g = cfg.goal_of(id);
         let mut goto = Goto {
             id,
             params: *params,

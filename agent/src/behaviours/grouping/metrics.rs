@@ -1,0 +1,221 @@
+//! Seed 001's measures from the records (section 3.1): per robot the navigation time t_s,
+//! travel distance d_m, change in angular velocity ΔΩ (eq. 16) and collisions; per group
+//! (the robots that follow one leader) their means and the exploration time; for the run the
+//! groups, leaders, tie-break rounds and the classifier's precision p_v (eq. 17). All from
+//! `trajectory.csv` (true poses) and `events.jsonl`, so both modes give the same numbers.
+
+use std::collections::BTreeMap;
+
+use serde_json::{Value, json};
+use swarmrt_protocol::records::Records;
+use swarmrt_scenario::{Config, wrap_angle};
+
+use super::params::GroupingParams;
+
+/// The metrics [`metrics`] computes, as dotted paths into metrics.json.
+pub const NAMES: [&str; 10] = [
+    "grouping.groups",
+    "grouping.leaders",
+    "grouping.tie_rounds",
+    "grouping.precision",
+    "grouping.reached",
+    "grouping.collisions",
+    "grouping.t_s",
+    "grouping.d_m",
+    "grouping.delta_omega",
+    "grouping.explore_time",
+];
+
+/// One robot's run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotRun {
+    /// Robot id.
+    pub id: u32,
+    /// The leader it followed at the end (itself for a leader), if it chose one.
+    pub leader: Option<u32>,
+    /// t_s: seconds from the start until it entered its goal (None: it never did).
+    pub t_s: Option<f64>,
+    /// d_m: metres travelled until then (or the end).
+    pub d_m: f64,
+    /// ΔΩ of eq. 16 until then, deg/s^2: the mean of |Ω(i) - Ω(i-1)| / l_c with Ω the true
+    /// turn rate over each decision cycle l_c = dt.
+    pub delta_omega: f64,
+    /// Collisions it took part in.
+    pub collisions: u32,
+}
+
+/// Eq. 16 over headings sampled every `dt` seconds, in deg/s^2.
+pub fn delta_omega(headings: &[f64], dt: f64) -> f64 {
+    let omega: Vec<f64> = headings
+        .windows(2)
+        .map(|w| wrap_angle(w[1] - w[0]) / dt)
+        .collect();
+    if omega.len() < 2 {
+        return 0.0;
+    }
+    let sum: f64 = omega.windows(2).map(|w| (w[1] - w[0]).abs() / dt).sum();
+    (sum / (omega.len() - 1) as f64).to_degrees()
+}
+
+fn note_key(note: &Value) -> Option<&str> {
+    match note {
+        Value::String(s) => Some(s),
+        Value::Object(m) => m.keys().next().map(|k| k.as_str()),
+        _ => None,
+    }
+}
+
+fn u64_of(v: &Value) -> u64 {
+    v.as_u64().unwrap_or(0)
+}
+
+/// Every robot's run, in id order.
+pub fn robot_runs(cfg: &Config, run: &Records) -> Vec<RobotRun> {
+    let n = cfg.robots.count as usize;
+    let dt = cfg.scenario.dt;
+    let mut reached: Vec<Option<u64>> = vec![None; n];
+    for e in run.events_of("reached") {
+        let r = u64_of(&e["robot"]) as usize;
+        if r < n && reached[r].is_none() {
+            reached[r] = Some(u64_of(&e["tick"]));
+        }
+    }
+    let mut collisions = vec![0u32; n];
+    for e in run.events_of("collision") {
+        for key in ["robot", "other"] {
+            if let Some(r) = e[key].as_u64()
+                && (r as usize) < n
+            {
+                collisions[r as usize] += 1;
+            }
+        }
+    }
+    let mut leader: Vec<Option<u32>> = vec![None; n];
+    for e in run.events_of("note") {
+        let r = u64_of(&e["robot"]) as usize;
+        if r < n && note_key(&e["note"]) == Some("leader") {
+            leader[r] = e["note"]["leader"]["leader"].as_u64().map(|l| l as u32);
+        }
+    }
+    let mut d = vec![0.0; n];
+    let mut headings: Vec<Vec<f64>> = vec![Vec::new(); n];
+    let mut last: Vec<Option<(f64, f64)>> = vec![None; n];
+    for rows in &run.ticks {
+        for r in rows {
+            let i = r.id as usize;
+            if i >= n || reached[i].is_some_and(|t| r.tick > t) {
+                continue;
+            }
+            if let Some((x, y)) = last[i] {
+                d[i] += ((r.x - x).powi(2) + (r.y - y).powi(2)).sqrt();
+            }
+            last[i] = Some((r.x, r.y));
+            if r.active {
+                headings[i].push(r.theta);
+            }
+        }
+    }
+    (0..n)
+        .map(|i| RobotRun {
+            id: i as u32,
+            leader: leader[i],
+            t_s: reached[i].map(|t| t as f64 * dt),
+            d_m: d[i],
+            delta_omega: delta_omega(&headings[i], dt),
+            collisions: collisions[i],
+        })
+        .collect()
+}
+
+fn mean(v: impl Iterator<Item = f64>) -> Option<f64> {
+    let (s, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    (n > 0).then(|| s / n as f64)
+}
+
+/// `grouping` in metrics.json: run totals plus `per_group` and `per_robot` tables (Tables I-IV).
+pub fn metrics(
+    cfg: &Config,
+    _params: &GroupingParams,
+    run: &Records,
+) -> Vec<(&'static str, Value)> {
+    let dt = cfg.scenario.dt;
+    let robots = robot_runs(cfg, run);
+    // First tick of each kind of note per robot, and the classifier's counts.
+    let mut first: BTreeMap<(u32, &str), u64> = BTreeMap::new();
+    let (mut correct, mut wrong) = (0u64, 0u64);
+    let mut changes: BTreeMap<u32, u64> = BTreeMap::new();
+    let mut leads: BTreeMap<u32, bool> = BTreeMap::new();
+    for e in run.events_of("note") {
+        let r = u64_of(&e["robot"]) as u32;
+        let Some(k) = note_key(&e["note"]) else { continue };
+        first.entry((r, k)).or_insert(u64_of(&e["tick"]));
+        match k {
+            "classified" => {
+                correct += u64_of(&e["note"]["classified"]["correct"]);
+                wrong += u64_of(&e["note"]["classified"]["wrong"]);
+            }
+            "leader" => {
+                let l = &e["note"]["leader"];
+                changes.insert(r, u64_of(&l["changes"]));
+                leads.insert(r, l["leads"].as_bool().unwrap_or(false));
+            }
+            _ => {}
+        }
+    }
+    let mut groups: BTreeMap<u32, Vec<&RobotRun>> = BTreeMap::new();
+    for r in &robots {
+        if let Some(l) = r.leader {
+            groups.entry(l).or_default().push(r);
+        }
+    }
+    let per_group: Vec<Value> = groups
+        .iter()
+        .map(|(&l, members)| {
+            let goal = ["goal_seen", "goal_told"]
+                .iter()
+                .filter_map(|k| first.get(&(l, *k)))
+                .min()
+                .copied();
+            let formed = first.get(&(l, "formed")).copied();
+            let explore = match (goal, formed) {
+                (Some(g), Some(f)) => Some(g.saturating_sub(f) as f64 * dt),
+                _ => None,
+            };
+            json!({
+                "leader": l,
+                "robots": members.len(),
+                "t_s": mean(members.iter().filter_map(|r| r.t_s)),
+                "d_m": mean(members.iter().map(|r| r.d_m)),
+                "delta_omega": mean(members.iter().map(|r| r.delta_omega)),
+                "collisions": members.iter().map(|r| r.collisions).sum::<u32>(),
+                "reached": members.iter().filter(|r| r.t_s.is_some()).count(),
+                "explore_time": explore,
+                "found_goal": goal.map(|g| if first.get(&(l, "goal_seen")) == Some(&g) { "seen" } else { "told" }),
+            })
+        })
+        .collect();
+    let per_robot: Vec<Value> = robots
+        .iter()
+        .map(|r| {
+            json!({"id": r.id, "leader": r.leader, "t_s": r.t_s, "d_m": r.d_m,
+                   "delta_omega": r.delta_omega, "collisions": r.collisions})
+        })
+        .collect();
+    let collisions = run.events_of("collision").count();
+    let all = json!({
+        "groups": groups.len(),
+        "leaders": leads.values().filter(|&&b| b).count(),
+        "tie_rounds": changes.values().sum::<u64>(),
+        "precision": (correct + wrong > 0).then(|| correct as f64 / (correct + wrong) as f64),
+        "classified": {"correct": correct, "wrong": wrong},
+        "reached": robots.iter().filter(|r| r.t_s.is_some()).count(),
+        "collisions": collisions,
+        "t_s": mean(robots.iter().filter_map(|r| r.t_s)),
+        "d_m": mean(robots.iter().map(|r| r.d_m)),
+        "delta_omega": mean(robots.iter().map(|r| r.delta_omega)),
+        "explore_time": mean(per_group.iter().filter_map(|g| g["explore_time"].as_f64())),
+        "per_group": per_group,
+        "per_robot": per_robot,
+    });
+    vec![("grouping", all)]
+}
