@@ -182,6 +182,10 @@ pub struct StartLayout {
     /// Start groups: robot `i` of `n` belongs to group `i * groups.len() / n`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub groups: Vec<StartGroup>,
+    /// Robots per start group, in id order (their sum is `robots.count`); default: as even
+    /// as the count allows.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub group_sizes: Vec<u32>,
     /// Each robot starts up to this far (metres, per axis, uniform from the seed) off its grid
     /// point; at most `(spacing - 2 * radius) / 2`, so robots never start overlapping.
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -221,6 +225,7 @@ impl Default for StartLayout {
             spacing: 0.8,
             heading_deg: 0.0,
             groups: Vec::new(),
+            group_sizes: Vec::new(),
             jitter: 0.0,
             heading_jitter_deg: 0.0,
             scatter: 0.0,

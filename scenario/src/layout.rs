@@ -85,8 +85,20 @@ impl Config {
         self.robots.start.groups.len().max(1)
     }
 
-    /// The start group of robot `id`: contiguous blocks of ids, sizes differing by at most one.
+    /// The start group of robot `id`: contiguous blocks of ids, of `start.group_sizes` or
+    /// else sizes differing by at most one.
     pub fn start_group(&self, id: u32) -> usize {
+        let sizes = &self.robots.start.group_sizes;
+        if !sizes.is_empty() {
+            let mut end = 0u64;
+            for (g, &size) in sizes.iter().enumerate() {
+                end += size as u64;
+                if (id as u64) < end {
+                    return g;
+                }
+            }
+            return sizes.len() - 1;
+        }
         let n = self.robots.count.max(1) as u64;
         let g = self.start_group_count() as u64;
         ((id as u64).min(n - 1) * g / n) as usize

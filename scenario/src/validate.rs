@@ -93,6 +93,11 @@ impl Config {
         range_f("robots.max_speed", r.max_speed, 0.0, 1000.0)?;
         range_f("robots.max_turn_rate", r.max_turn_rate, 0.0, 1000.0)?;
         let st = &r.start;
+        check(
+            !st.groups.is_empty() || st.group_sizes.is_empty(),
+            "robots.start.group_sizes",
+            "no sizes without robots.start.groups",
+        )?;
         if st.groups.is_empty() {
             for (key, v) in [("robots.start.x", st.x), ("robots.start.y", st.y)] {
                 let v = v.ok_or_else(|| {
@@ -115,6 +120,21 @@ impl Config {
                 "robots.start.groups",
                 &format!("at most robots.count = {} groups", r.count),
             )?;
+            if !st.group_sizes.is_empty() {
+                let sum: u64 = st.group_sizes.iter().map(|&s| s as u64).sum();
+                check(
+                    st.group_sizes.len() == st.groups.len()
+                        && sum == r.count as u64
+                        && st.group_sizes.iter().all(|&s| s > 0),
+                    "robots.start.group_sizes",
+                    &format!(
+                        "one positive size per start group ({}) summing to robots.count = {}, got {:?}",
+                        st.groups.len(),
+                        r.count,
+                        st.group_sizes
+                    ),
+                )?;
+            }
             for (i, g) in st.groups.iter().enumerate() {
                 range_f(
                     &format!("robots.start.groups[{i}].x"),

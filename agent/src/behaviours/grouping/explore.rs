@@ -3,12 +3,15 @@
 //! COG of all groups X, takes the partial COGs with them (eq. 12), and searches random points
 //! in the sector between them (eq. 13).
 //!
-//! Our reading: the sector's apex is X (Fig. 10's yellow area fans out from the large cross),
-//! alpha is the angle of X -> partial COG with the right-hand (clockwise) neighbour and beta
-//! of X -> partial COG with the left-hand (counter-clockwise) one, and the search position is
-//! X + rand(0, r) (cos t, sin t) with t = rand(alpha, beta) swept counter-clockwise from
-//! alpha. With one group the sector is the full circle about its own COG; with two, the
-//! half-plane facing away from the other group.
+//! Our reading: alpha is the angle of X -> partial COG with the right-hand (clockwise)
+//! neighbour and beta of X -> partial COG with the left-hand (counter-clockwise) one, so the
+//! sectors between them split the plane around X among the groups (Fig. 10's yellow area
+//! fans out from the large cross). The search position is X + rho (cos t, sin t) with
+//! t = rand(alpha, beta) swept counter-clockwise from alpha and rho = r sqrt(rand(0, 1)),
+//! uniform over the sector's area (rand(0, r) as printed puts half the points within r/2 of
+//! X, where the groups' sectors meet). Drawn from each group's own COG instead, the sectors
+//! point outward and the groups end in the corners (we tried it). With one group the sector
+//! is the full circle about its COG; with two, the half-plane facing away from the other.
 
 use std::f64::consts::{PI, TAU};
 
@@ -17,7 +20,7 @@ use super::force::V2;
 /// A search sector: apex and the angles alpha (start) and beta (end), counter-clockwise.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sector {
-    /// Where the sector fans out from.
+    /// Where the sector fans out from: X, the COG of all groups.
     pub apex: V2,
     /// Start angle, radians.
     pub alpha: f64,
@@ -31,10 +34,10 @@ impl Sector {
         wrap(self.alpha + self.span)
     }
 
-    /// Eq. 13 for draws `u_angle`, `u_radius` in [0, 1).
+    /// Eq. 13 for draws `u_angle`, `u_radius` in [0, 1), uniform over the sector's area.
     pub fn point(&self, r: f64, u_angle: f64, u_radius: f64) -> V2 {
         let t = self.alpha + u_angle * self.span;
-        self.apex + V2::new(t.cos(), t.sin()) * (u_radius * r)
+        self.apex + V2::new(t.cos(), t.sin()) * (u_radius.sqrt() * r)
     }
 
     /// True when direction `a` (radians) lies inside the sector.

@@ -13,7 +13,7 @@ use swarmrt_scenario::{Config, wrap_angle};
 use super::params::GroupingParams;
 
 /// The metrics [`metrics`] computes, as dotted paths into metrics.json.
-pub const NAMES: [&str; 10] = [
+pub const NAMES: [&str; 11] = [
     "grouping.groups",
     "grouping.leaders",
     "grouping.tie_rounds",
@@ -21,6 +21,7 @@ pub const NAMES: [&str; 10] = [
     "grouping.reached",
     "grouping.collisions",
     "grouping.t_s",
+    "grouping.t_nav",
     "grouping.d_m",
     "grouping.delta_omega",
     "grouping.explore_time",
@@ -35,6 +36,9 @@ pub struct RobotRun {
     pub leader: Option<u32>,
     /// t_s: seconds from the start until it entered its goal (None: it never did).
     pub t_s: Option<f64>,
+    /// Seconds from its leader's first formation until it entered its goal: the navigation
+    /// alone, without grouping and the leader choice (closer to what the paper times).
+    pub t_nav: Option<f64>,
     /// d_m: metres travelled until then (or the end).
     pub d_m: f64,
     /// ΔΩ of eq. 16 until then, deg/s^2: the mean of |Ω(i) - Ω(i-1)| / l_c with Ω the true
@@ -91,10 +95,15 @@ pub fn robot_runs(cfg: &Config, run: &Records) -> Vec<RobotRun> {
         }
     }
     let mut leader: Vec<Option<u32>> = vec![None; n];
+    let mut formed: Vec<Option<u64>> = vec![None; n];
     for e in run.events_of("note") {
         let r = u64_of(&e["robot"]) as usize;
-        if r < n && note_key(&e["note"]) == Some("leader") {
-            leader[r] = e["note"]["leader"]["leader"].as_u64().map(|l| l as u32);
+        match note_key(&e["note"]) {
+            Some("leader") if r < n => {
+                leader[r] = e["note"]["leader"]["leader"].as_u64().map(|l| l as u32);
+            }
+            Some("formed") if r < n && formed[r].is_none() => formed[r] = Some(u64_of(&e["tick"])),
+            _ => {}
         }
     }
     let mut d = vec![0.0; n];
@@ -120,6 +129,10 @@ pub fn robot_runs(cfg: &Config, run: &Records) -> Vec<RobotRun> {
             id: i as u32,
             leader: leader[i],
             t_s: reached[i].map(|t| t as f64 * dt),
+            t_nav: match (reached[i], leader[i].and_then(|l| formed.get(l as usize).copied().flatten())) {
+                (Some(r), Some(f)) => Some(r.saturating_sub(f) as f64 * dt),
+                _ => None,
+            },
             d_m: d[i],
             delta_omega: delta_omega(&headings[i], dt),
             collisions: collisions[i],
@@ -185,6 +198,7 @@ pub fn metrics(
                 "leader": l,
                 "robots": members.len(),
                 "t_s": mean(members.iter().filter_map(|r| r.t_s)),
+                "t_nav": mean(members.iter().filter_map(|r| r.t_nav)),
                 "d_m": mean(members.iter().map(|r| r.d_m)),
                 "delta_omega": mean(members.iter().map(|r| r.delta_omega)),
                 "collisions": members.iter().map(|r| r.collisions).sum::<u32>(),
@@ -197,7 +211,7 @@ pub fn metrics(
     let per_robot: Vec<Value> = robots
         .iter()
         .map(|r| {
-            json!({"id": r.id, "leader": r.leader, "t_s": r.t_s, "d_m": r.d_m,
+            json!({"id": r.id, "leader": r.leader, "t_s": r.t_s, "t_nav": r.t_nav, "d_m": r.d_m,
                    "delta_omega": r.delta_omega, "collisions": r.collisions})
         })
         .collect();
@@ -211,6 +225,7 @@ pub fn metrics(
         "reached": robots.iter().filter(|r| r.t_s.is_some()).count(),
         "collisions": collisions,
         "t_s": mean(robots.iter().filter_map(|r| r.t_s)),
+        "t_nav": mean(robots.iter().filter_map(|r| r.t_nav)),
         "d_m": mean(robots.iter().map(|r| r.d_m)),
         "delta_omega": mean(robots.iter().map(|r| r.delta_omega)),
         "explore_time": mean(per_group.iter().filter_map(|g| g["explore_time"].as_f64())),

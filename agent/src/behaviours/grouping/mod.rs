@@ -67,6 +67,10 @@ const SHIFT: f64 = 0.3;
 const FORMED: f64 = 0.3;
 /// ... or after this many seconds of forming, whichever comes first.
 const FORMING_LIMIT: f64 = 20.0;
+/// Seconds without progress after which a leader detours, and how long the detour holds.
+const STALL: f64 = 8.0;
+/// Metres a detour goes sideways.
+const DETOUR: f64 = 4.0;
 /// Below this speed (m/s) of the wanted motion a robot stands still.
 const SETTLED: f64 = 0.03;
 /// Seconds a search position is pursued before a new one is drawn.
@@ -139,6 +143,12 @@ pub struct Grouping {
     /// Leader: other leaders' COGs (tick heard, COG).
     cogs: BTreeMap<u32, (u64, V2)>,
     arrived: bool,
+    /// Leader: the closest the COG came to its target and when (stall detection).
+    progress: (f64, u64),
+    /// Leader: a sideways detour point and until when it holds.
+    detour: Option<(V2, u64)>,
+    /// Leader: the side of the next detour (+1 left, -1 right).
+    side: f64,
     /// The turn rate it commanded last tick (for `turn_accel`).
     omega: f64,
     rng: Rng,
@@ -193,6 +203,9 @@ impl Grouping {
             search: None,
             cogs: BTreeMap::new(),
             arrived: false,
+            progress: (f64::INFINITY, 0),
+            detour: None,
+            side: if id % 2 == 0 { 1.0 } else { -1.0 },
             omega: 0.0,
             rng: stream(seed, "grouping_search", id as u64),
         }
@@ -420,7 +433,13 @@ impl Grouping {
         });
         form.vel = V2::zeros();
         if self.formed && !self.arrived {
-            let target = self.goal.or_else(|| self.search_point(t, form.cog));
+            let target = match self.goal {
+                Some(g) => Some(self.unstick(t, measured, g)),
+                None => {
+                    let p = self.search_point(t, form.cog);
+                    self.stalled_search(t, measured, p)
+                }
+            };
             if let Some(target) = target {
                 let to = target - form.cog;
                 if self.goal.is_some() && to.norm() <= self.p.arrive {
@@ -434,6 +453,47 @@ impl Grouping {
             }
         }
         self.form = Some(form);
+    }
+
+    /// Global avoidance for a stalled group (our addition): when the measured COG has not
+    /// come 0.3 m closer to `goal` for `STALL` seconds (a wall across the way, where the
+    /// potential field of eq. 10-11 has its local minimum), the leader steers the circle
+    /// sideways for a while, to alternating sides, then heads for the goal again.
+    fn unstick(&mut self, t: u64, cog: V2, goal: V2) -> V2 {
+        let stall = (STALL / self.dt) as u64;
+        if let Some((p, until)) = self.detour {
+            if t < until && (p - cog).norm() > self.p.radius {
+                return p;
+            }
+            self.detour = None;
+            self.progress = (f64::INFINITY, t);
+        }
+        let d = (goal - cog).norm();
+        if d < self.progress.0 - 0.3 {
+            self.progress = (d, t);
+        } else if t - self.progress.1 > stall && d > 1e-6 {
+            self.side = -self.side;
+            let to = (goal - cog) / d;
+            let p = cog + V2::new(-to.y, to.x) * (self.side * DETOUR) - to * (DETOUR / 2.0);
+            self.detour = Some((p, t + stall));
+            self.progress = (f64::INFINITY, t);
+            return p;
+        }
+        goal
+    }
+
+    /// A search position the group cannot get closer to (behind a wall) is dropped: the next
+    /// recheck draws another.
+    fn stalled_search(&mut self, t: u64, cog: V2, p: Option<V2>) -> Option<V2> {
+        let target = p?;
+        let d = (target - cog).norm();
+        if d < self.progress.0 - 0.3 {
+            self.progress = (d, t);
+        } else if t - self.progress.1 > (STALL / self.dt) as u64 {
+            self.search = None;
+            self.progress = (f64::INFINITY, t);
+        }
+        Some(target)
     }
 
     /// Eq. 12-13: the current search position, drawn anew when reached or stale.
@@ -460,6 +520,7 @@ impl Grouping {
         p.x = p.x.clamp(x0 + margin, (x1 - margin).max(x0 + margin));
         p.y = p.y.clamp(y0 + margin, (y1 - margin).max(y0 + margin));
         self.search = Some((p, t));
+        self.progress = (f64::INFINITY, t);
         Some(p)
     }
 

@@ -67,7 +67,7 @@ pub struct GroupingParams {
 impl Default for GroupingParams {
     fn default() -> Self {
         GroupingParams {
-            grouping_time: 15.0,
+            grouping_time: 8.0,
             cluster_distance: 0.8,
             gravity: 1.0,
             force_cap: 4.0,
