@@ -205,7 +205,7 @@ impl Grouping {
             arrived: false,
             progress: (f64::INFINITY, 0),
             detour: None,
-            side: if id % 2 == 0 { 1.0 } else { -1.0 },
+            side: if id.is_multiple_of(2) { 1.0 } else { -1.0 },
             omega: 0.0,
             rng: stream(seed, "grouping_search", id as u64),
         }
