@@ -71,6 +71,10 @@ const FORMING_LIMIT: f64 = 20.0;
 const STALL: f64 = 8.0;
 /// Metres a detour goes sideways.
 const DETOUR: f64 = 4.0;
+/// Largest angle between a detour and the goal direction, radians (100°).
+const MAX_TURN_AWAY: f64 = 1.745;
+/// Detours after which a leader follows its wall the other way.
+const FLIP_AFTER: u32 = 10;
 /// Below this speed (m/s) of the wanted motion a robot stands still.
 const SETTLED: f64 = 0.03;
 /// Seconds a search position is pursued before a new one is drawn.
@@ -147,8 +151,14 @@ pub struct Grouping {
     progress: (f64, u64),
     /// Leader: a sideways detour point and until when it holds.
     detour: Option<(V2, u64)>,
-    /// Leader: the side of the next detour (+1 left, -1 right).
+    /// Leader: the side its detours turn to (+1 left of the goal direction, -1 right).
     side: f64,
+    /// Leader: detours since the way to the goal was last clear.
+    detours: u32,
+    /// Rays of the last scan that hit a robot (by the classifier).
+    robot_rays: Vec<bool>,
+    /// Leader: its last lidar scan, (world-frame angle, range) per ray.
+    scan: Vec<(f64, f64)>,
     /// The turn rate it commanded last tick (for `turn_accel`).
     omega: f64,
     rng: Rng,
@@ -206,6 +216,9 @@ impl Grouping {
             progress: (f64::INFINITY, 0),
             detour: None,
             side: if id.is_multiple_of(2) { 1.0 } else { -1.0 },
+            scan: Vec::new(),
+            robot_rays: Vec::new(),
+            detours: 0,
             omega: 0.0,
             rng: stream(seed, "grouping_search", id as u64),
         }
@@ -269,6 +282,12 @@ impl Grouping {
             };
         }
         let blobs = self.classifier.blobs(obs.lidar(), &self.angles, self.cyclic);
+        self.robot_rays = vec![false; obs.lidar().len()];
+        for b in blobs.iter().filter(|b| b.robot) {
+            for &k in &b.rays {
+                self.robot_rays[k] = true;
+            }
+        }
         let judged = self.rb_range.min(self.classifier.range);
         let (right, wrong) =
             classify::matches(&blobs, &truth, judged, 2.0 * self.classifier.radius);
@@ -318,6 +337,18 @@ impl Grouping {
             .iter()
             .take(MAX_GROUP - 1)
             .map(|(&id, &(_, p))| (id, seen.get(&id).copied().unwrap_or(p)))
+            .collect();
+        // The scan without the robots the classifier recognised: members are not walls.
+        let range = self.classifier.range;
+        self.scan = obs
+            .lidar()
+            .iter()
+            .zip(&self.angles)
+            .enumerate()
+            .map(|(k, (&d, &a))| {
+                let robot = self.robot_rays.get(k).copied().unwrap_or(false);
+                (obs.theta + a, if robot { range } else { d })
+            })
             .collect();
         if obs.goal_visible != 0 {
             let a = obs.theta + obs.goal_bearing;
@@ -455,31 +486,90 @@ impl Grouping {
         self.form = Some(form);
     }
 
-    /// Global avoidance for a stalled group (our addition): when the measured COG has not
-    /// come 0.3 m closer to `goal` for `STALL` seconds (a wall across the way, where the
-    /// potential field of eq. 10-11 has its local minimum), the leader steers the circle
-    /// sideways for a while, to alternating sides, then heads for the goal again.
+    /// Global avoidance for a stalled group (our addition, a bug algorithm at the group's
+    /// scale): when the measured COG has not come 0.3 m closer to `goal` for `STALL` seconds
+    /// (a wall across the way, where the potential field of eq. 10-11 has its local minimum),
+    /// the leader steers the circle along free lidar directions, always turning to the same
+    /// side of the goal direction, `DETOUR` metres at a time, until its lidar sees the way to
+    /// the goal clear.
     fn unstick(&mut self, t: u64, cog: V2, goal: V2) -> V2 {
         let stall = (STALL / self.dt) as u64;
+        let to = goal - cog;
+        let goal_dir = to.y.atan2(to.x);
         if let Some((p, until)) = self.detour {
+            if self.clear_towards(goal_dir, to.norm()) {
+                self.detour = None;
+                self.detours = 0;
+                self.progress = (to.norm(), t);
+                return goal;
+            }
             if t < until && (p - cog).norm() > self.p.radius {
                 return p;
             }
-            self.detour = None;
-            self.progress = (f64::INFINITY, t);
+            return self.next_detour(t, cog, goal_dir, stall);
         }
-        let d = (goal - cog).norm();
+        let d = to.norm();
         if d < self.progress.0 - 0.3 {
             self.progress = (d, t);
         } else if t - self.progress.1 > stall && d > 1e-6 {
-            self.side = -self.side;
-            let to = (goal - cog) / d;
-            let p = cog + V2::new(-to.y, to.x) * (self.side * DETOUR) - to * (DETOUR / 2.0);
-            self.detour = Some((p, t + stall));
-            self.progress = (f64::INFINITY, t);
-            return p;
+            return self.next_detour(t, cog, goal_dir, stall);
         }
         goal
+    }
+
+    /// The next detour point: the free direction nearest the goal's on this leader's side.
+    fn next_detour(&mut self, t: u64, cog: V2, goal_dir: f64, stall: u64) -> V2 {
+        // A wall followed for `FLIP_AFTER` detours without the way clearing is a dead end
+        // (it meets the arena's edge): follow it the other way.
+        self.detours += 1;
+        if self.detours.is_multiple_of(FLIP_AFTER) {
+            self.side = -self.side;
+        }
+        let pick = |side: f64| {
+            self.scan
+                .iter()
+                .enumerate()
+                .filter(|&(k, _)| self.free(k))
+                .map(|(_, &(a, _))| (wrap_angle(a - goal_dir), a))
+                // Along the wall or toward the goal, never back: a side with no such free
+                // direction is a dead end (a corner with the arena's edge).
+                .filter(|&(off, _)| off * side >= -0.05 && off.abs() <= MAX_TURN_AWAY)
+                .min_by(|x, y| x.0.abs().total_cmp(&y.0.abs()))
+                .map(|(_, a)| a)
+        };
+        let (first, other) = (pick(self.side), pick(-self.side));
+        let dir = match (first, other) {
+            (Some(a), _) => a,
+            (None, Some(a)) => {
+                self.side = -self.side;
+                a
+            }
+            (None, None) => goal_dir + std::f64::consts::PI,
+        };
+        let p = cog + V2::new(dir.cos(), dir.sin()) * DETOUR;
+        self.detour = Some((p, t + stall));
+        p
+    }
+
+    /// Ray `k` of the leader's last scan and its two neighbours read nothing.
+    fn free(&self, k: usize) -> bool {
+        let n = self.scan.len();
+        [k + n - 1, k, k + 1]
+            .iter()
+            .all(|&j| self.scan[j % n].1 >= self.classifier.range - 1e-6)
+    }
+
+    /// The leader's lidar sees nothing within `dist` (or its range) across a 40° wedge
+    /// toward `dir`, members aside.
+    fn clear_towards(&self, dir: f64, dist: f64) -> bool {
+        let reach = dist.min(self.classifier.range) - 0.1;
+        let wedge = 20f64.to_radians();
+        let rays: Vec<&(f64, f64)> = self
+            .scan
+            .iter()
+            .filter(|(a, _)| wrap_angle(a - dir).abs() <= wedge)
+            .collect();
+        !rays.is_empty() && rays.iter().all(|&&(_, r)| r >= reach)
     }
 
     /// A search position the group cannot get closer to (behind a wall) is dropped: the next
