@@ -250,14 +250,15 @@ pub fn nearest_grid_points(
 /// as "on one line" (seed 001's leader choice assumes no three robots start collinear).
 pub const MIN_TRIANGLE_HEIGHT: f64 = 0.05;
 
-/// True when `p` lies within [`MIN_TRIANGLE_HEIGHT`] of the line through some two of `pts`.
+/// True when `p` and some two of `pts` are nearly on one line: the triangle's smallest height
+/// (twice its area over its longest side) is under [`MIN_TRIANGLE_HEIGHT`].
 pub fn collinear_with(pts: &[(f64, f64)], p: (f64, f64)) -> bool {
+    let dist = |a: (f64, f64), b: (f64, f64)| ((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt();
     for (i, a) in pts.iter().enumerate() {
         for b in &pts[i + 1..] {
-            let (ux, uy) = (b.0 - a.0, b.1 - a.1);
-            let len = (ux * ux + uy * uy).sqrt();
-            if len > 0.0 && ((p.0 - a.0) * uy - (p.1 - a.1) * ux).abs() / len < MIN_TRIANGLE_HEIGHT
-            {
+            let area2 = ((b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0)).abs();
+            let longest = dist(*a, *b).max(dist(*a, p)).max(dist(*b, p));
+            if longest > 0.0 && area2 / longest < MIN_TRIANGLE_HEIGHT {
                 return true;
             }
         }

@@ -168,3 +168,90 @@ fn wheel_slip_is_bounded_and_absent_from_a_config_that_does_not_use_it() {
         c
     );
 }
+
+const SCATTER: &str = r#"
+[robots.start]
+spacing = 0.5
+scatter = 2.0
+groups = [{ x = 3.0, y = 3.0 }, { x = 7.0, y = 7.0, goal = [1.0, 9.0] }]
+group_sizes = [3, 6]
+"#;
+
+#[test]
+fn scatter_places_each_group_at_random_in_its_disc_apart_and_never_three_on_a_line() {
+    let c = load(SCATTER, &["robots.count=9"]).unwrap();
+    let groups: Vec<usize> = (0..9).map(|i| c.start_group(i)).collect();
+    assert_eq!(groups, [0, 0, 0, 1, 1, 1, 1, 1, 1]);
+    let poses = c.start_poses(|_, _| true).unwrap();
+    let centres = [(3.0, 3.0), (7.0, 7.0)];
+    for (i, p) in poses.iter().enumerate() {
+        let (cx, cy) = centres[groups[i]];
+        assert!(
+            ((p.0 - cx).powi(2) + (p.1 - cy).powi(2)).sqrt() <= 2.0 + 1e-9,
+            "{p:?}"
+        );
+        for q in &poses[..i] {
+            assert!(((p.0 - q.0).powi(2) + (p.1 - q.1).powi(2)).sqrt() >= 0.5 - 1e-9);
+        }
+    }
+    for g in 0..2 {
+        let pts: Vec<(f64, f64)> = poses
+            .iter()
+            .zip(&groups)
+            .filter(|&(_, &k)| k == g)
+            .map(|(p, _)| (p.0, p.1))
+            .collect();
+        for (i, p) in pts.iter().enumerate() {
+            let others: Vec<(f64, f64)> = pts
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, &q)| q)
+                .collect();
+            assert!(!swarmrt_scenario::layout::collinear_with(&others, *p));
+        }
+    }
+    // Seeded: the same seed places the same, another seed elsewhere.
+    assert_eq!(poses, c.start_poses(|_, _| true).unwrap());
+    let other = load(SCATTER, &["robots.count=9", "scenario.seed=4"]).unwrap();
+    assert_ne!(poses, other.start_poses(|_, _| true).unwrap());
+    // Each group's goal: its own, or the map's.
+    assert_eq!((c.goal_of(0).x, c.goal_of(0).y), (8.0, 8.0));
+    assert_eq!((c.goal_of(5).x, c.goal_of(5).y), (1.0, 9.0));
+    assert_eq!(c.goals().len(), 2);
+}
+
+#[test]
+fn collinear_points_are_recognised() {
+    use swarmrt_scenario::layout::collinear_with;
+    assert!(collinear_with(&[(0.0, 0.0), (1.0, 1.0)], (3.0, 3.01)));
+    assert!(!collinear_with(&[(0.0, 0.0), (1.0, 1.0)], (3.0, 2.5)));
+    assert!(!collinear_with(&[(0.0, 0.0)], (3.0, 3.0)));
+}
+
+#[test]
+fn group_sizes_and_scatter_are_checked() {
+    let bad = |extra: &str, ov: &[&str], key: &str| {
+        let e = load(extra, ov).unwrap_err().to_string();
+        assert!(e.contains(key), "{e}");
+    };
+    bad(SCATTER, &["robots.count=8"], "robots.start.group_sizes");
+    bad(
+        SCATTER,
+        &["robots.count=9", "robots.start.group_sizes=[9]"],
+        "robots.start.group_sizes",
+    );
+    bad(
+        SCATTER,
+        &["robots.count=9", "robots.start.scatter=-1"],
+        "robots.start.scatter",
+    );
+    bad(
+        &SCATTER.replace("goal = [1.0, 9.0]", "goal = [20.0, 1.0]"),
+        &["robots.count=9"],
+        "robots.start.groups[1].goal",
+    );
+    // A disc too small for the robots is refused when the layout is built, not hung.
+    let c = load(SCATTER, &["robots.count=9", "robots.start.scatter=0.3"]).unwrap();
+    assert!(c.start_poses(|_, _| true).is_none());
+}

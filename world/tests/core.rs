@@ -498,3 +498,52 @@ fn explicit_lidar_angles_measure_along_their_rays() {
     assert!((l[0] - 2.0).abs() < 1e-6, "wall 2 m behind: {l:?}");
     assert!((l[1] - 3.0).abs() < 1e-6, "circle edge 3 m ahead: {l:?}");
 }
+
+#[test]
+fn obstacles_hide_the_goal_only_with_occlusion() {
+    // The goal sits behind the circle at (6, 2), straight ahead of the robot.
+    let see = |extra: &[&str]| {
+        let mut sets = vec!["map.goal={ x = 9.0, y = 2.0, radius = 0.5 }"];
+        sets.extend_from_slice(extra);
+        let mut w = World::new(&config(&sets), VOCABULARY).unwrap();
+        let mut obs = vec![Observation::empty(0, 0)];
+        w.observe(&mut obs);
+        obs[0].goal_visible
+    };
+    assert_eq!(see(&[]), 1);
+    assert_eq!(see(&["robots.goal_sensor.occlusion=true"]), 0);
+    // In the clear, occlusion changes nothing.
+    assert_eq!(
+        see(&[
+            "robots.goal_sensor.occlusion=true",
+            "map.goal={ x = 2.0, y = 8.0, radius = 0.5 }"
+        ]),
+        1
+    );
+}
+
+#[test]
+fn a_group_with_its_own_goal_sees_and_reaches_only_that_one() {
+    let start = "robots.start={ spacing = 1.0, groups = [{ x = 2.0, y = 2.0, goal = [3.0, 2.0] }, \
+                 { x = 2.0, y = 8.0 }] }";
+    let mut w = World::new(&config(&["robots.count=2", start]), VOCABULARY).unwrap();
+    let mut obs = vec![Observation::empty(0, 0); 2];
+    w.observe(&mut obs);
+    // Robot 0 sees its own goal 1 m ahead; robot 1 the map's goal at (9, 9).
+    assert!(
+        (obs[0].goal_range - 1.0).abs() < 1e-9,
+        "{}",
+        obs[0].goal_range
+    );
+    assert!((obs[1].goal_range - (49.0f64 + 1.0).sqrt()).abs() < 1e-9);
+    drive(&mut w, 1.0, 0.0, 10);
+    let reached: Vec<u32> = w
+        .drain_events()
+        .into_iter()
+        .filter_map(|e| match e {
+            Event::Reached { robot, .. } => Some(robot),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(reached, [0]);
+}

@@ -26,11 +26,11 @@ mod classify;
 mod explore;
 mod force;
 mod messages;
-mod metrics;
+pub mod metrics;
 mod params;
 
 pub use messages::{GroupMsg, GroupNote, MAX_GROUP};
-pub use metrics::{RobotRun, robot_runs};
+pub use metrics::{RobotRun, delta_omega, robot_runs};
 pub use params::{GroupingParams, Sense};
 
 /// The equations, public for tests and for anyone reusing them.
