@@ -32,6 +32,9 @@ pub struct Trial {
     pub unique_top: bool,
     /// Every robot believes in the same leader.
     pub agree: bool,
+    /// The sensing graph is connected: the robots form one group by the paper's sensing, so
+    /// exactly one leader is the right answer (a split group rightly has two).
+    pub connected: bool,
 }
 
 /// Runs trial `seed` for a group of `n` robots.
@@ -86,6 +89,20 @@ pub fn trial(n: u32, loss: f64, area_per_robot: f64, seed: u64) -> Trial {
         ..ConsensusConfig::default()
     });
     let all_see_all = sees.iter().all(|v| v.len() + 1 == n as usize);
+    let connected = {
+        let mut seen = vec![false; n as usize];
+        let mut stack = vec![0usize];
+        seen[0] = true;
+        while let Some(i) = stack.pop() {
+            for nb in &sees[i] {
+                if !seen[nb.id as usize] {
+                    seen[nb.id as usize] = true;
+                    stack.push(nb.id as usize);
+                }
+            }
+        }
+        seen.iter().all(|&s| s)
+    };
     let scores: Vec<u8> = sees
         .iter()
         .map(|v| swarmrt_agent::consensus::quadrant::score(v))
@@ -115,6 +132,7 @@ pub fn trial(n: u32, loss: f64, area_per_robot: f64, seed: u64) -> Trial {
         all_see_all,
         unique_top,
         agree: beliefs.iter().all(|b| b.is_some() && *b == beliefs[0]),
+        connected,
     }
 }
 

@@ -253,6 +253,7 @@ fn fuzz_quadrant(a: &QuadrantArgs) -> SwarmResult<()> {
     let mut lines = Vec::new();
     for n in 3..=9u32 {
         let (mut one, mut all_see, mut unique, mut agree, mut leaders) = (0, 0, 0, 0, 0);
+        let (mut connected, mut one_connected) = (0, 0);
         for seed in a.start_seed..end {
             let t = quadrant::trial(n, a.loss, a.area_per_robot, seed);
             one += (t.leaders == 1) as u64;
@@ -260,20 +261,30 @@ fn fuzz_quadrant(a: &QuadrantArgs) -> SwarmResult<()> {
             unique += t.unique_top as u64;
             agree += t.agree as u64;
             leaders += t.leaders as u64;
+            connected += t.connected as u64;
+            one_connected += (t.connected && t.leaders == 1) as u64;
             pb.inc(1);
         }
         let pct = |k: u64| 100.0 * k as f64 / a.trials as f64;
+        let of_connected = if connected > 0 {
+            format!("{:>6.1}%", 100.0 * one_connected as f64 / connected as f64)
+        } else {
+            "     -".to_string()
+        };
         lines.push(format!(
-            "{n:>5}   {:>6.1}%     {:>6.1}%     {:>6.2}      {:>6.1}%      {:>6.1}%",
+            "{n:>5}   {:>6.1}%     {:>6.1}%     {:>6.2}      {:>6.1}%      {:>6.1}%     {:>6.1}%    {of_connected}",
             pct(one),
             pct(agree),
             leaders as f64 / a.trials as f64,
             pct(unique),
-            pct(all_see)
+            pct(all_see),
+            pct(connected),
         ));
     }
     pb.finish_and_clear();
-    println!("group  one leader  all agree  leaders/group  unique top score  all see all");
+    println!(
+        "group  one leader  all agree  leaders/group  unique top score  all see all  connected  one leader if connected"
+    );
     for l in lines {
         println!("{l}");
     }
