@@ -13,12 +13,18 @@ fn every_connected_group_settles_on_exactly_one_leader() {
             if t.connected {
                 connected += 1;
                 sparse += !t.all_see_all as u32;
-                assert_eq!(t.leaders, 1, "n {n} area {area} loss {loss} seed {seed}: {t:?}");
+                assert_eq!(
+                    t.leaders, 1,
+                    "n {n} area {area} loss {loss} seed {seed}: {t:?}"
+                );
                 assert!(t.agree, "n {n} area {area} loss {loss} seed {seed}: {t:?}");
             }
         }
     }
     // The cases that defeated the first version (members that do not all see each other)
     // are most of these trials.
-    assert!(connected > 150 && sparse > 100, "{connected} connected, {sparse} sparse");
+    assert!(
+        connected > 150 && sparse > 100,
+        "{connected} connected, {sparse} sparse"
+    );
 }

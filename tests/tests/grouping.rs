@@ -1,0 +1,141 @@
+//! Seed 001 end to end: S1 with eight robot processes ends on a circle around the goal without
+//! a collision; S2's three groups find the goal; both modes write the same bytes with a lossy,
+//! late radio.
+
+use std::f64::consts::TAU;
+use std::path::Path;
+use std::time::Duration;
+use swarmrt_tests::{assert_ok, bytes, metrics, swarm};
+
+const LIMIT: Duration = Duration::from_secs(600);
+
+fn run(config: &str, dir: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["run", config, "--out", dir.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    assert_ok(&swarm(&args, LIMIT));
+    metrics(dir)
+}
+
+/// The last tick's (id, x, y) rows of `trajectory.csv`.
+fn last_positions(dir: &Path) -> Vec<(u32, f64, f64)> {
+    let text = String::from_utf8(bytes(dir, "trajectory.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (tick, id, x, y) = (col("tick"), col("id"), col("x"), col("y"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let last = rows.last().unwrap()[tick];
+    rows.iter()
+        .filter(|r| r[tick] == last)
+        .map(|r| {
+            (
+                r[id].parse().unwrap(),
+                r[x].parse().unwrap(),
+                r[y].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// Within this many metres of its slot's circle, and this many degrees of even spacing.
+const RADIUS_TOLERANCE: f64 = 0.25;
+const ANGLE_TOLERANCE_DEG: f64 = 15.0;
+
+#[test]
+fn s1_eight_robot_processes_end_on_a_circle_at_the_goal_without_a_collision() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("s1");
+    let m = run("configs/grouping_s1.toml", &dir, &[]);
+    assert_eq!(m["mode"], "processes");
+    assert_eq!(m["collisions"], 0, "{m}");
+    let g = &m["grouping"];
+    assert_eq!(g["groups"], 1, "{g}");
+    assert_eq!(g["leaders"], 1, "{g}");
+    assert_eq!(g["reached"], 8, "{g}");
+    assert!(g["precision"].as_f64().unwrap() > 0.9, "{g}");
+    // The run stops once all eight are in the goal; the circle (radius 1 m) is then whole.
+    let pos = last_positions(&dir);
+    assert_eq!(pos.len(), 8);
+    let (cx, cy) = (
+        pos.iter().map(|p| p.1).sum::<f64>() / 8.0,
+        pos.iter().map(|p| p.2).sum::<f64>() / 8.0,
+    );
+    let mut angles: Vec<f64> = pos
+        .iter()
+        .map(|p| {
+            let r = ((p.1 - cx).powi(2) + (p.2 - cy).powi(2)).sqrt();
+            assert!(
+                (r - 1.0).abs() < RADIUS_TOLERANCE,
+                "robot {} is {r:.2} m from the COG",
+                p.0
+            );
+            (p.2 - cy).atan2(p.1 - cx)
+        })
+        .collect();
+    angles.sort_by(f64::total_cmp);
+    for k in 0..8 {
+        let gap = (angles[(k + 1) % 8] - angles[k])
+            .rem_euclid(TAU)
+            .to_degrees();
+        assert!(
+            (gap - 45.0).abs() < ANGLE_TOLERANCE_DEG,
+            "gap {gap:.1}° in {angles:?}"
+        );
+    }
+}
+
+#[test]
+fn s2_records_are_identical_in_both_modes_with_loss_and_delay() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sets = [
+        "--ticks",
+        "500",
+        "--set",
+        "radio.loss=0.3",
+        "--set",
+        "radio.delay_ticks=3",
+        "--set",
+        "radio.jitter_ticks=2",
+    ];
+    let a = tmp.path().join("processes");
+    let b = tmp.path().join("in-process");
+    run("configs/grouping_s2.toml", &a, &sets);
+    let mut in_process = sets.to_vec();
+    in_process.push("--in-process");
+    let m = run("configs/grouping_s2.toml", &b, &in_process);
+    assert!(m["radio"]["dropped_loss"].as_u64().unwrap() > 0, "{m}");
+    // By tick 500 the three groups have chosen their leaders and formed.
+    assert_eq!(m["grouping"]["groups"], 3, "{}", m["grouping"]);
+    for file in ["trajectory.csv", "events.jsonl"] {
+        assert!(
+            bytes(&a, file) == bytes(&b, file),
+            "{file} differs between modes"
+        );
+    }
+}
+
+#[test]
+fn s2_three_groups_explore_and_every_robot_reaches_the_goal() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("s2");
+    let m = run("configs/grouping_s2.toml", &dir, &["--in-process"]);
+    assert_eq!(m["collisions"], 0, "{m}");
+    let g = &m["grouping"];
+    assert_eq!(g["groups"], 3, "{g}");
+    assert_eq!(g["reached"], 11, "{g}");
+    let groups = g["per_group"].as_array().unwrap();
+    // One leader saw the goal; the others were told (section 2.4).
+    let found: Vec<&str> = groups
+        .iter()
+        .map(|p| p["found_goal"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        found.iter().filter(|f| **f == "seen").count(),
+        1,
+        "{found:?}"
+    );
+    assert!(
+        groups.iter().all(|p| p["explore_time"].as_f64().is_some()),
+        "{g}"
+    );
+}
