@@ -176,6 +176,26 @@ fn quadrant_leader() {
 }
 
 #[test]
+fn grouping_s1() {
+    check("grouping_s1", false);
+}
+
+#[test]
+fn grouping_s2() {
+    check("grouping_s2", false);
+}
+
+#[test]
+fn grouping_s3() {
+    check("grouping_s3", false);
+}
+
+#[test]
+fn grouping_s4() {
+    check("grouping_s4", false);
+}
+
+#[test]
 fn flocking_obstacles() {
     check("flocking_obstacles", false);
 }

@@ -1,0 +1,116 @@
+#!/usr/bin/env python3
+"""Tables I-IV of seed 001 and the beyond-the-paper tables, from the sweeps reproduce.sh ran.
+
+Groups are named by the start group of their leader (G1, G2, ... in the config's order), so
+rows line up with the paper's G_no even though groups form by themselves."""
+import glob
+import json
+import os
+import sys
+from statistics import mean
+
+OUT = sys.argv[1]
+
+
+def runs(name):
+    out = []
+    for path in sorted(glob.glob(os.path.join(OUT, name, "runs", "*", "metrics.json"))):
+        with open(path) as f:
+            out.append(json.load(f))
+    return out
+
+
+def fmt(v, digits=1):
+    if v is None:
+        return "-"
+    return f"{v:.{digits}f}"
+
+
+def avg(values):
+    values = [v for v in values if v is not None]
+    return mean(values) if values else None
+
+
+def group_of(leader, sizes):
+    end = 0
+    for g, s in enumerate(sizes):
+        end += s
+        if leader < end:
+            return g
+    return len(sizes) - 1
+
+
+def per_group_table(name, sizes, title):
+    rs = runs(name)
+    rows = {}
+    for m in rs:
+        for g in m["grouping"]["per_group"]:
+            rows.setdefault(group_of(g["leader"], sizes), []).append(g)
+    print(f"\n{title} ({len(rs)} runs)\n")
+    print("| group | robots | t_s total (s) | t_nav (s) | explore (s) | d_m (m) | ΔΩ (deg/s²) | reached | collisions |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for g in sorted(rows):
+        gs = rows[g]
+        print(
+            f"| G{g + 1} | {fmt(avg([x['robots'] for x in gs]))} | {fmt(avg([x['t_s'] for x in gs]))} | "
+            f"{fmt(avg([x['t_nav'] for x in gs]))} | {fmt(avg([x['explore_time'] for x in gs]))} | "
+            f"{fmt(avg([x['d_m'] for x in gs]))} | {fmt(avg([x['delta_omega'] for x in gs]))} | "
+            f"{sum(x['reached'] for x in gs)}/{sum(x['robots'] for x in gs)} | {sum(x['collisions'] for x in gs)} |"
+        )
+    groups = [m["grouping"]["groups"] for m in rs]
+    print(f"\ngroups formed per run: {groups}; leaders per run: {[m['grouping']['leaders'] for m in rs]}")
+
+
+def summary_row(label, rs):
+    g = [m["grouping"] for m in rs]
+    robots = sum(m["agents"] for m in rs)
+    return (
+        f"| {label} | {fmt(avg([x['t_s'] for x in g]))} | {fmt(avg([x['t_nav'] for x in g]))} | "
+        f"{fmt(avg([x['d_m'] for x in g]))} | {fmt(avg([x['delta_omega'] for x in g]))} | "
+        f"{sum(x['reached'] for x in g)}/{robots} | {sum(m['collisions'] for m in rs)} | "
+        f"{fmt(avg([x['groups'] for x in g]), 2)} | {fmt(avg([x['leaders'] for x in g]), 2)} | "
+        f"{fmt(avg([x['precision'] for x in g]), 3)} |"
+    )
+
+
+HEAD = ("| {} | t_s (s) | t_nav (s) | d_m (m) | ΔΩ (deg/s²) | reached | collisions | groups | leaders | p_v |\n"
+        "|---|---|---|---|---|---|---|---|---|---|")
+
+rs = runs("s1")
+print(f"Table I, S1 ({len(rs)} runs: 5 seeds per size, processes)\n")
+print(HEAD.format("robots"))
+for n in range(4, 9):
+    sel = [m for m in rs if m["agents"] == n]
+    if sel:
+        print(summary_row(str(n), sel))
+
+per_group_table("s2", [4, 4, 3], "Table II, S2 (three groups explore for one goal; processes)")
+per_group_table("s31", [4, 4, 3], "Table III, S31 (groups of 4, 4, 3; radius 1.8 m; processes)")
+per_group_table("s32", [5, 4, 3], "Table III, S32 (groups of 5, 4, 3)")
+per_group_table("s33", [6, 4, 3], "Table III, S33 (groups of 6, 4, 3)")
+per_group_table("s4", [3, 3, 3], "Table IV, S4 (maze, three groups of three; processes)")
+
+for sc in ["s1", "s2"]:
+    rs = runs(f"{sc}_radio")
+    print(f"\n{sc.upper()} under radio loss and delay ({len(rs)} runs, 3 seeds each, in-process)\n")
+    print(HEAD.format("loss, delay"))
+    # The sweep's run directory names carry the varied values.
+    cells = {}
+    for path in sorted(glob.glob(os.path.join(OUT, f"{sc}_radio", "runs", "*", "metrics.json"))):
+        name = os.path.basename(os.path.dirname(path))
+        # e.g. radio.loss=0.1_radio.delay_ticks=2_s3
+        stem = name.rsplit("_s", 1)[0]
+        loss = stem.split("radio.loss=")[1].split("_")[0]
+        delay = stem.split("radio.delay_ticks=")[1].split("_")[0]
+        parts = {"radio.loss": loss, "radio.delay_ticks": delay}
+        with open(path) as f:
+            cells.setdefault((float(parts["radio.loss"]), int(parts["radio.delay_ticks"])), []).append(json.load(f))
+    for (loss, delay) in sorted(cells):
+        print(summary_row(f"{int(loss * 100)} %, {delay}", cells[(loss, delay)]))
+
+print("\nOne group of 8 to 30 robots (S1's field, 3 seeds each, in-process)\n")
+print(HEAD.format("robots"))
+for n in [8, 12, 16, 20, 25, 30]:
+    rs = runs(f"scale_{n}")
+    if rs:
+        print(summary_row(str(n), rs))
