@@ -17,7 +17,6 @@ M=(--metric grouping.t_s --metric grouping.t_nav --metric grouping.d_m
 # headings), every robot a process.
 "$SWARM" sweep configs/grouping_s1.toml --vary robots.count=4,5,6,7,8 --seeds "$SEEDS" \
   --start-seed 1 --jobs "$JOBS" --out "$OUT/s1" "${M[@]}"
-"$SWARM" sweep configs/grouping_s2.toml --vary scenario.seed=1 --seeds 1 --jobs 1 \
 "$SWARM" sweep configs/grouping_s2.toml --vary robots.count=11 --seeds "$SEEDS" \
   --start-seed 1 --jobs "$JOBS" --out "$OUT/s2" "${M[@]}"
 for s in "31 11 [4,4,3]" "32 12 [5,4,3]" "33 13 [6,4,3]"; do

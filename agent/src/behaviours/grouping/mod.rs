@@ -75,6 +75,12 @@ const DETOUR: f64 = 4.0;
 const MAX_TURN_AWAY: f64 = 1.745;
 /// Detours after which a leader follows its wall the other way.
 const FLIP_AFTER: u32 = 10;
+/// Half-width of the sector ahead whose clearance limits the speed, radians (30°).
+const AHEAD: f64 = 0.524;
+/// Metres of the clearance ahead kept free of the body ...
+const CLEARANCE_MARGIN: f64 = 0.05;
+/// ... and seconds in which the rest must suffice to stop.
+const STOP_TIME: f64 = 0.4;
 /// Below this speed (m/s) of the wanted motion a robot stands still.
 const SETTLED: f64 = 0.03;
 /// Seconds a search position is pursued before a new one is drawn.
@@ -262,7 +268,16 @@ impl Grouping {
         };
         let step = self.p.turn_accel * self.dt;
         act.omega = omega.clamp(self.omega - step, self.omega + step);
-        act.v = v;
+        // A turn rate that cannot change at once needs room: never faster than stopping
+        // within the clearance ahead allows.
+        let ahead = obs
+            .lidar()
+            .iter()
+            .zip(&self.angles)
+            .filter(|&(_, &a)| a.abs() <= AHEAD)
+            .map(|(&d, _)| d - self.classifier.radius - CLEARANCE_MARGIN)
+            .fold(f64::INFINITY, f64::min);
+        act.v = v.min(ahead.max(0.0) / STOP_TIME);
         self.omega = act.omega;
     }
 
