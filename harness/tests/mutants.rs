@@ -10,8 +10,8 @@ use swarmrt_harness::fuzz::consensus::{draw, run};
 /// caught in 10,000 seeds (docs/consensus.md, "Mutants").
 const CAUGHT_AT: [(&str, u64); 7] = [
     ("vote-for-anyone", 0),
-    ("no-up-to-date-check", 35),
-    ("keep-conflicting-entries", 1),
+    ("no-up-to-date-check", 5),
+    ("keep-conflicting-entries", 2),
     ("forget-vote-on-restart", 1),
     ("accept-stale-append", 42),
     ("no-step-down", 0),

@@ -221,8 +221,8 @@ pub fn draw(seed: u64) -> Case {
 /// Fault shapes aimed at the textbook Raft bugs (docs/consensus.md, "Mutants"), drawn from a
 /// stream of their own and appended after the faults above, so those draws stay as they were
 /// (a seed's base case is unchanged; about two thirds of the seeds get extra faults):
-/// - leader churn: the leader crashes a few times in a row, each time right after a proposal
-///   (its entry on a minority at most), restarts soon, and sometimes a voter crashes and
+/// - leader churn: the leader crashes a few times in a row, each time right after a burst of
+///   proposals (its entries on a minority at most), restarts soon, and sometimes a voter crashes and
 ///   restarts during the election that follows (Figure 8; votes across restarts);
 /// - a stale leader: the leader of a moment is cut off alone while a proposal arrives, and
 ///   comes back after the others elected a new one (stale terms, conflicting entries).
@@ -238,7 +238,12 @@ fn shapes(seed: u64, cfg: &mut Config, faults: &mut Vec<Fault>, heal: u64, t: (u
             if at >= heal {
                 break;
             }
-            extra.push(at.saturating_sub(rng.random_range(0..=rtt + 1)));
+            // A burst: more decisions than one frame carries, so a follower catching up
+            // acknowledges a prefix without the next leader's no-op (Figure 8's window).
+            let before = at.saturating_sub(rng.random_range(0..=rtt + 1));
+            for j in 0..rng.random_range(1..=8) {
+                extra.push(before.saturating_sub(j));
+            }
             faults.push(Fault::Crash {
                 at,
                 robot: rng.random_range(0..n),
