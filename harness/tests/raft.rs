@@ -244,3 +244,72 @@ fn a_restarted_robot_keeps_term_vote_and_log_and_reapplies() {
     }
     assert_eq!(reapplied, before.commit);
 }
+
+/// Fuzz seeds 778, 786, 10212, 10751, 12286, 12782 and 12841 with the burst shape: a follower
+/// whose log ends in a run of entries of an old term stayed behind its leader forever. A leader
+/// starts every `next_index` past its own log; the follower's first refusal brings its
+/// `next_index` down to the follower's log end. The broadcast from there spans several
+/// frames, and the follower refuses each: the first on the conflict (hint `prev_index - 1`),
+/// the others because they start past its log (hint: its last index). Merged into the one
+/// answer a tick sends, the last refusal, the highest hint, won, so `next_index` never went
+/// below the follower's log end and the conflict was never resolved.
+#[test]
+fn a_follower_with_a_long_conflicting_log_catches_up() {
+    let mut net = Net::new(3, true);
+    let a = net.run_until_leader(300);
+    net.run(10);
+    let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+    // Leader `a`, cut off alone, appends ten decisions nobody else gets.
+    net.isolate(a);
+    for id in 0..10 {
+        let d = Decision::SetSpeed {
+            speed: f64::from(id),
+        };
+        assert_eq!(
+            net.nodes[a as usize].propose(id, d, &mut Notes::new(NOTE_BUDGET)),
+            Proposed::Appended
+        );
+    }
+    // `b` and `c` elect a leader of a later term, which commits more than one frame holds.
+    let mut l = None;
+    for _ in 0..300 {
+        net.step();
+        l = net.leaders().into_iter().map(|(r, _)| r).find(|&r| r != a);
+        if l.is_some() {
+            break;
+        }
+    }
+    let l = l.expect("the majority elects a leader");
+    for id in 100..130 {
+        let d = Decision::SetGoal {
+            x: f64::from(id),
+            y: 0.0,
+        };
+        assert_eq!(
+            net.nodes[l as usize].propose(id, d, &mut Notes::new(NOTE_BUDGET)),
+            Proposed::Appended
+        );
+    }
+    net.run(100);
+    let long = net.nodes[l as usize].log().last_index();
+    assert_eq!(net.nodes[b as usize].commit(), long);
+    assert_eq!(net.nodes[c as usize].commit(), long);
+    // Now `l` goes and `a` comes back: the other one leads with the long log, and needs `a`
+    // for its majority.
+    net.cut.clear();
+    net.isolate(l);
+    net.run(400);
+    let other = if l == b { c } else { b };
+    let leader = &net.nodes[other as usize];
+    assert_eq!(leader.role(), Role::Leader);
+    let r = &net.nodes[a as usize];
+    assert_eq!(
+        (r.log().last_index(), r.commit(), r.applied()),
+        (leader.log().last_index(), leader.commit(), leader.commit()),
+        "the old leader catches up with the new one"
+    );
+    assert!(leader.commit() > long, "the new leader commits its no-op");
+    for id in 0..10 {
+        assert!(!r.log().has_decision(id), "its own entries were replaced");
+    }
+}

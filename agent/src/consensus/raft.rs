@@ -981,8 +981,16 @@ impl Raft {
 /// Drops superseded campaign requests, and merges the answers to several AppendEntries of one
 /// leader and term within a tick into one:
 /// the highest success index (each success vouches for a prefix of the same leader's log, and
-/// a leader never contradicts its own entries within its term), or, without a success, the last
-/// refusal. Frames are scarce; one answer says all the others would.
+/// a leader never contradicts its own entries within its term), or, without a success, the
+/// refusal with the lowest hint. Frames are scarce; one answer says all the others would.
+///
+/// Lowest, not last: a broadcast from a follower's `next_index` spans several frames, and a
+/// follower whose log conflicts refuses the first with `prev_index - 1` but every later one,
+/// which starts past its log, with its last index. Keeping the last refusal told the leader
+/// "retry past my log" every tick, so its `next_index` for that follower never came down to
+/// the conflict and the follower never caught up (fuzz seeds 778, 786, 10212, ... with the
+/// burst shape; `harness/tests/raft.rs`,
+/// `a_follower_with_a_long_conflicting_log_catches_up`). A lower hint only costs resending.
 fn coalesce(msgs: Vec<(u32, ConsensusMsg)>) -> Vec<(u32, ConsensusMsg)> {
     let mut out: Vec<(u32, ConsensusMsg)> = Vec::with_capacity(msgs.len());
     for (to, m) in msgs {
@@ -1007,7 +1015,8 @@ fn coalesce(msgs: Vec<(u32, ConsensusMsg)>) -> Vec<(u32, ConsensusMsg)> {
                 match (*s0, success) {
                     (true, true) => *i0 = (*i0).max(index),
                     (true, false) => {}
-                    (false, _) => (*s0, *i0) = (success, index),
+                    (false, true) => (*s0, *i0) = (true, index),
+                    (false, false) => *i0 = (*i0).min(index),
                 }
                 continue;
             }
@@ -1079,6 +1088,15 @@ mod tests {
                 (1, resp(4, false, 0)),
                 (BROADCAST, req(5)),
             ]
+        );
+        // Refusals keep the lowest hint, whatever their order.
+        assert_eq!(
+            coalesce(vec![(1, resp(3, false, 9)), (1, resp(3, false, 10))]),
+            vec![(1, resp(3, false, 9))]
+        );
+        assert_eq!(
+            coalesce(vec![(1, resp(3, false, 10)), (1, resp(3, false, 9))]),
+            vec![(1, resp(3, false, 9))]
         );
         // A refusal followed by a success becomes the success.
         assert_eq!(

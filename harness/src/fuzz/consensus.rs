@@ -53,6 +53,22 @@ pub enum Fault {
         /// First tick healed.
         to: u64,
     },
+    /// Figure 8 of the Raft paper, staged. Whoever leads at `from` (A) is cut off alone until
+    /// `to` while proposals arrive, so their entries are on A alone. The first other robot to
+    /// win an election meanwhile (B) crashes in the tick it won, after writing its no-op and
+    /// before anything left: a later-term entry at the same index, on B alone. The first
+    /// leader after the cut heals (usually A, in a later term, its no-op behind its old
+    /// entries) crashes `ack` ticks after a follower was seen partway through catching up on
+    /// its log (grown, still short of the leader's), when that follower's acknowledgement of
+    /// a prefix can have arrived but not yet the rest; B restarts then, and A at the heal.
+    Figure8 {
+        /// First tick of the cut.
+        from: u64,
+        /// First tick healed.
+        to: u64,
+        /// Ticks from a follower's partial catch-up to the leader's crash.
+        ack: u64,
+    },
 }
 
 /// One drawn case.
@@ -221,11 +237,13 @@ pub fn draw(seed: u64) -> Case {
 /// Fault shapes aimed at the textbook Raft bugs (docs/consensus.md, "Mutants"), drawn from a
 /// stream of their own and appended after the faults above, so those draws stay as they were
 /// (a seed's base case is unchanged; about two thirds of the seeds get extra faults):
-/// - leader churn: the leader crashes a few times in a row, each time right after a proposal
-///   (its entry on a minority at most), restarts soon, and sometimes a voter crashes and
+/// - leader churn: the leader crashes a few times in a row, each time right after a burst of
+///   proposals (its entries on a minority at most), restarts soon, and sometimes a voter crashes and
 ///   restarts during the election that follows (Figure 8; votes across restarts);
 /// - a stale leader: the leader of a moment is cut off alone while a proposal arrives, and
-///   comes back after the others elected a new one (stale terms, conflicting entries).
+///   comes back after the others elected a new one (stale terms, conflicting entries);
+/// - Figure 8 ([`Fault::Figure8`], from a stream of its own): an earlier term's entries
+///   replicated to a majority by a later leader that crashes before its own no-op is.
 fn shapes(seed: u64, cfg: &mut Config, faults: &mut Vec<Fault>, heal: u64, t: (u32, u32, u32)) {
     let (min, max, rtt) = (t.0 as u64, t.1 as u64, t.2 as u64);
     let n = cfg.robots.count;
@@ -238,7 +256,12 @@ fn shapes(seed: u64, cfg: &mut Config, faults: &mut Vec<Fault>, heal: u64, t: (u
             if at >= heal {
                 break;
             }
-            extra.push(at.saturating_sub(rng.random_range(0..=rtt + 1)));
+            // A burst: more decisions than one frame carries, so a follower catching up
+            // acknowledges a prefix without the next leader's no-op (Figure 8's window).
+            let before = at.saturating_sub(rng.random_range(0..=rtt + 1));
+            for j in 0..rng.random_range(1..=8) {
+                extra.push(before.saturating_sub(j));
+            }
             faults.push(Fault::Crash {
                 at,
                 robot: rng.random_range(0..n),
@@ -263,6 +286,20 @@ fn shapes(seed: u64, cfg: &mut Config, faults: &mut Vec<Fault>, heal: u64, t: (u
         let to = (from + rng.random_range(min..=2 * max + rtt)).min(heal);
         extra.push(from + rng.random_range(1..=rtt + 1));
         faults.push(Fault::IsolateLeader { from, to });
+    }
+    // Figure 8 (its own stream, so the shapes above stay as they were): a burst of proposals
+    // longer than two frames, so a follower catching up on it acknowledges a prefix without
+    // the new leader's no-op (the note budget of a tick holds about two frames of appends).
+    let mut rng = stream(seed, "figure8", 0);
+    if n >= 3 && rng.random_bool(0.3) {
+        let from = rng.random_range(0..heal);
+        let to = (from + rng.random_range(max + 2 * rtt..=3 * max + 2 * rtt)).min(heal);
+        // The acknowledgement takes half a round trip, plus up to one tick of slack.
+        let ack = rng.random_range(rtt / 2..=rtt / 2 + 1);
+        for _ in 0..rng.random_range(16..=32) {
+            extra.push(from + 1);
+        }
+        faults.push(Fault::Figure8 { from, to, ack });
     }
     if let Some(c) = cfg.consensus.as_mut() {
         // Before the last proposal (the one at the heal that liveness waits for).
@@ -308,6 +345,7 @@ pub fn run(case: &Case, record: bool) -> Outcome {
         .map_or(0, |c| c.propose.len().saturating_sub(1)) as u16;
     let mut crashed_by: Vec<Option<usize>> = vec![None; n];
     let mut isolated: Vec<Option<u32>> = vec![None; case.faults.len()];
+    let mut fig8: Vec<Figure8State> = vec![Figure8State::default(); case.faults.len()];
     let end = case.heal + case.bound;
     let mut recovered_after = None;
     let mut failures = Vec::new();
@@ -319,6 +357,68 @@ pub fn run(case: &Case, record: bool) -> Outcome {
                 && *from == t
             {
                 isolated[k] = sim.leader();
+            }
+            if let &Fault::Figure8 { from, to, ack } = f {
+                let st = &mut fig8[k];
+                if from == t
+                    && let Some(a) = sim.leader()
+                {
+                    isolated[k] = Some(a);
+                    st.a_term = term_of(&sim, a);
+                    st.armed = true;
+                    sim.crash_on_winning(Some(Some(a)));
+                }
+                if st.armed {
+                    if let Some(b) = sim.take_crashed_on_winning() {
+                        st.armed = false;
+                        st.b = Some(b);
+                        crashed_by[b as usize] = Some(k);
+                    } else if t >= to {
+                        st.armed = false;
+                        sim.crash_on_winning(None);
+                    }
+                }
+                if st.b.is_some() && st.crash.is_none() && t >= to {
+                    match st.leader {
+                        None => {
+                            if let Some(l) = sim.leader()
+                                && term_of(&sim, l) > st.a_term
+                            {
+                                st.leader = Some(l);
+                                st.last = (0..n as u32).map(|r| last_index(&sim, r)).collect();
+                            }
+                        }
+                        Some(l) => {
+                            // A follower whose log grew this tick but still ends short of
+                            // the leader's: it acknowledges a prefix. (A robot that is down
+                            // has no log here; its restart is not growth.)
+                            let top = last_index(&sim, l).unwrap_or(0);
+                            for r in (0..n as u32).filter(|&r| r != l) {
+                                let li = last_index(&sim, r);
+                                if let (Some(now), Some(Some(before))) =
+                                    (li, st.last.get(r as usize))
+                                    && now > *before
+                                    && now < top
+                                    && st.crash.is_none()
+                                {
+                                    st.crash = Some((l, t + ack));
+                                }
+                                st.last[r as usize] = li;
+                            }
+                        }
+                    }
+                }
+                if let (Some(b), Some((l, at))) = (st.b, st.crash)
+                    && at == t
+                {
+                    if sim.alive(l) && crashed_by[b as usize] == Some(k) {
+                        sim.crash(l);
+                        crashed_by[l as usize] = Some(k);
+                        sim.restart(b);
+                        crashed_by[b as usize] = None;
+                    }
+                    st.b = None;
+                }
             }
             if let Fault::Crash {
                 at,
@@ -398,9 +498,43 @@ pub fn run(case: &Case, record: bool) -> Outcome {
     }
 }
 
+/// Progress of a [`Fault::Figure8`] through its stages.
+#[derive(Debug, Clone, Default)]
+struct Figure8State {
+    /// The term of the leader cut off (A), so the leader after the cut is told from it.
+    a_term: u64,
+    /// Waiting for the first other robot to win (B).
+    armed: bool,
+    /// B, down since it won.
+    b: Option<u32>,
+    /// The first leader after the cut.
+    leader: Option<u32>,
+    /// Every robot's last log index at the previous tick (`None`: down), once that leader
+    /// is known.
+    last: Vec<Option<u64>>,
+    /// That leader, and the tick it crashes at.
+    crash: Option<(u32, u64)>,
+}
+
+/// Robot `r`'s last log index, unless it is down.
+fn last_index(sim: &Sim, r: u32) -> Option<u64> {
+    sim.agent(r)
+        .and_then(|a| a.consensus())
+        .and_then(|c| c.raft())
+        .map(|raft| raft.log().last_index())
+}
+
+fn term_of(sim: &Sim, r: u32) -> u64 {
+    sim.agent(r)
+        .and_then(|a| a.consensus())
+        .and_then(|c| c.raft())
+        .map_or(0, |raft| raft.term())
+}
+
 /// Radio groups at tick `t`: one bit per active partition, so two robots are apart when any
 /// active partition puts them on different sides.
-/// `isolated[k]` is the robot fault `k` cut off, for [`Fault::IsolateLeader`].
+/// `isolated[k]` is the robot fault `k` cut off, for [`Fault::IsolateLeader`] and
+/// [`Fault::Figure8`].
 fn groups(faults: &[Fault], isolated: &[Option<u32>], t: u64, n: usize) -> Option<Vec<u64>> {
     let mut g = vec![0u64; n];
     let mut any = false;
@@ -412,7 +546,9 @@ fn groups(faults: &[Fault], isolated: &[Option<u32>], t: u64, n: usize) -> Optio
                     g[r] |= (*s as u64) << bit;
                 }
             }
-            Fault::IsolateLeader { from, to } if (*from..*to).contains(&t) => {
+            Fault::IsolateLeader { from, to } | Fault::Figure8 { from, to, .. }
+                if (*from..*to).contains(&t) =>
+            {
                 if let Some(l) = isolated[bit] {
                     any = true;
                     g[l as usize] |= 1 << bit;

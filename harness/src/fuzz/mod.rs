@@ -82,6 +82,11 @@ pub struct Sim {
     saved: Vec<Option<Persistent>>,
     /// Robots to crash inside their next step, and where.
     crash_in_step: Vec<Option<CrashPoint>>,
+    /// Armed by [`Sim::crash_on_winning`]: crash the next robot (but this one) that wins an
+    /// election, inside the step it won in, after its write.
+    crash_on_winning: Option<Option<u32>>,
+    /// The robot that crash took, until [`Sim::take_crashed_on_winning`].
+    crashed_on_winning: Option<u32>,
     incarnation: Vec<u32>,
     medium: RadioMedium,
     positions: Vec<(f64, f64)>,
@@ -108,6 +113,8 @@ impl Sim {
             agents: (0..n as u32).map(|i| Some(Agent::new(cfg, i))).collect(),
             saved: vec![None; n],
             crash_in_step: vec![None; n],
+            crash_on_winning: None,
+            crashed_on_winning: None,
             incarnation: vec![0; n],
             medium: RadioMedium::new(radio, cfg.scenario.seed, n),
             positions,
@@ -205,6 +212,19 @@ impl Sim {
         }
     }
 
+    /// Arms a crash of the next robot other than `except` that wins an election: it dies in
+    /// the step it won, after its new state (term, vote, no-op) was written and before
+    /// anything of that step left ([`CrashPoint::AfterWrite`]). Nobody hears of its leadership;
+    /// its no-op is on it alone (Figure 8's leader of term 3). `None` disarms.
+    pub fn crash_on_winning(&mut self, armed: Option<Option<u32>>) {
+        self.crash_on_winning = armed;
+    }
+
+    /// The robot the armed crash took, once (see [`Sim::crash_on_winning`]).
+    pub fn take_crashed_on_winning(&mut self) -> Option<u32> {
+        self.crashed_on_winning.take()
+    }
+
     /// Restarts crashed robot `r` from its saved persistent state.
     pub fn restart(&mut self, r: u32) {
         if self.agents[r as usize].is_some() {
@@ -248,7 +268,22 @@ impl Sim {
             }
             obs.inbox_len = inbox.len().min(obs.inbox.len()) as u16;
             let before = agent.consensus().and_then(|c| c.persistent());
+            let leading = |a: &Agent| {
+                a.consensus()
+                    .and_then(|c| c.raft())
+                    .is_some_and(|r| r.role() == Role::Leader)
+            };
+            let led = leading(agent);
             let cmd = agent.step(&obs);
+            if let Some(except) = self.crash_on_winning
+                && except != Some(i as u32)
+                && !led
+                && leading(agent)
+            {
+                self.crash_on_winning = None;
+                self.crashed_on_winning = Some(i as u32);
+                self.crash_in_step[i] = Some(CrashPoint::AfterWrite);
+            }
             if let Some(point) = self.crash_in_step[i].take() {
                 // The process dies before its command leaves: no frame, no note.
                 crashed_in_step.push((i as u32, point, before));
