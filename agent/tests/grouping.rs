@@ -16,7 +16,8 @@ fn close(a: V2, b: V2) -> bool {
 #[test]
 fn the_force_sum_matches_hand_computed_cases() {
     // (sensed robots relative to the robot, G, cap) -> R_i A
-    let cases: &[(&[(f64, f64)], f64, f64, (f64, f64))] = &[
+    type Case<'a> = (&'a [(f64, f64)], f64, f64, (f64, f64));
+    let cases: &[Case] = &[
         // One robot 1 m east: G / 1.
         (&[(1.0, 0.0)], 1.0, 10.0, (1.0, 0.0)),
         // 1 m east and 2 m north: (1, 0) + (0, 1/4).
