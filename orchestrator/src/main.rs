@@ -27,7 +27,7 @@ fn main() -> std::process::ExitCode {
         Cmd::Tune(args) => commands::tune::tune(args, rx),
         // Dispatched above, before the handler exists; here only to keep the match whole.
         Cmd::Bench(args) => commands::bench::bench(args),
-        Cmd::Fuzz(cmd) => commands::fuzz::fuzz(cmd),
+        Cmd::Fuzz(cmd) => commands::fuzz::fuzz(cmd, rx),
     };
     exit(result)
 }

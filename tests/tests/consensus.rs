@@ -262,3 +262,24 @@ fn fuzzer_arguments_are_checked() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+#[test]
+fn a_long_fuzz_run_stops_on_sigterm_between_seeds_and_reports_what_ran() {
+    let child = Command::new(swarm_bin())
+        .args(["fuzz", "consensus", "--seeds", "10000000"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_secs(2));
+    // SAFETY: plain kill(2) of our own child.
+    unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
+    let out = wait_with_watchdog(child, Duration::from_secs(20));
+    assert_eq!(out.status.code(), Some(130), "{out:?}");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("0 failed"), "{text}");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("interrupted"),
+        "{out:?}"
+    );
+}

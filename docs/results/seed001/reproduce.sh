@@ -21,8 +21,8 @@ M=(--metric grouping.t_s --metric grouping.t_nav --metric grouping.d_m
   --start-seed 1 --jobs "$JOBS" --out "$OUT/s2" "${M[@]}"
 for s in "31 11 [4,4,3]" "32 12 [5,4,3]" "33 13 [6,4,3]"; do
   set -- $s
-  "$SWARM" sweep configs/grouping_s3.toml --vary robots.count=$2 --seeds "$SEEDS" \
-    --start-seed 1 --jobs "$JOBS" --set "robots.start.group_sizes=$3" \
+  "$SWARM" sweep configs/grouping_s3.toml --vary behaviour.radius=1.8 --seeds "$SEEDS" \
+    --start-seed 1 --jobs "$JOBS" --set robots.count=$2 --set "robots.start.group_sizes=$3" \
     --out "$OUT/s$1" "${M[@]}"
 done
 "$SWARM" sweep configs/grouping_s4.toml --vary robots.count=9 --seeds "$SEEDS" \
@@ -48,10 +48,14 @@ for n in 8 12 16 20 25 30; do
     --out "$OUT/scale_$n" "${M[@]}"
 done
 
+# The classifier's precision p_v (eq. 17) with and without lidar noise: S1, 8 robots.
+"$SWARM" sweep configs/grouping_s1.toml --vary robots.noise.lidar=0,0.01,0.02,0.05 --seeds 3 \
+  --start-seed 1 --jobs "$JOBS" --in-process --out "$OUT/noise" "${M[@]}"
+
 python3 "$HERE/tables.py" "$OUT" > "$HERE/tables.md"
 cp "$OUT/s1/runs/robots.count=8_s1/trajectory.png" "$HERE/s1_8_robots.png"
 cp "$OUT/s2/runs/robots.count=11_s1/trajectory.png" "$HERE/s2.png"
-cp "$OUT/s31/runs/robots.count=11_s1/trajectory.png" "$HERE/s31.png"
+cp "$OUT/s31/runs/behaviour.radius=1.8_s1/trajectory.png" "$HERE/s31.png"
 cp "$OUT/s4/runs/robots.count=9_s1/trajectory.png" "$HERE/s4.png"
 cp "$OUT/scale_30/runs/robots.count=30_s1/trajectory.png" "$HERE/scale_30.png"
 echo "tables: $HERE/tables.md"

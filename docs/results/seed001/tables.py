@@ -108,6 +108,21 @@ for sc in ["s1", "s2"]:
     for (loss, delay) in sorted(cells):
         print(summary_row(f"{int(loss * 100)} %, {delay}", cells[(loss, delay)]))
 
+print("\nThe classifier under lidar noise (S1, 8 robots, 3 seeds each, in-process)\n")
+print("| lidar noise (m, std) | p_v | robot blobs right | wrong | collisions | reached |")
+print("|---|---|---|---|---|---|")
+noise = {}
+for path in sorted(glob.glob(os.path.join(OUT, "noise", "runs", "*", "metrics.json"))):
+    sd = os.path.basename(os.path.dirname(path)).split("=")[1].rsplit("_s", 1)[0]
+    with open(path) as f:
+        noise.setdefault(float(sd), []).append(json.load(f))
+for sd in sorted(noise):
+    g = [m["grouping"] for m in noise[sd]]
+    right = sum(x["classified"]["correct"] for x in g)
+    wrong = sum(x["classified"]["wrong"] for x in g)
+    print(f"| {sd} | {right / max(1, right + wrong):.3f} | {right} | {wrong} | "
+          f"{sum(m['collisions'] for m in noise[sd])} | {sum(x['reached'] for x in g)}/{sum(m['agents'] for m in noise[sd])} |")
+
 print("\nOne group of 8 to 30 robots (S1's field, 3 seeds each, in-process)\n")
 print(HEAD.format("robots"))
 for n in [8, 12, 16, 20, 25, 30]:

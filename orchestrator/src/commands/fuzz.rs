@@ -4,6 +4,8 @@
 use std::io::IsTerminal;
 use std::time::Instant;
 
+use crossbeam_channel::Receiver;
+
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::cli::{ConsensusArgs, ElectionArgs, FuzzCmd, QuadrantArgs};
@@ -40,15 +42,24 @@ fn check_loss(key: &str, p: f64) -> SwarmResult<()> {
 }
 
 /// Runs a fuzzer or measurement.
-pub fn fuzz(cmd: &FuzzCmd) -> SwarmResult<()> {
+pub fn fuzz(cmd: &FuzzCmd, interrupt: Receiver<()>) -> SwarmResult<()> {
     match cmd {
-        FuzzCmd::Consensus(a) => fuzz_consensus(a),
-        FuzzCmd::Election(a) => fuzz_election(a),
-        FuzzCmd::Quadrant(a) => fuzz_quadrant(a),
+        FuzzCmd::Consensus(a) => fuzz_consensus(a, &interrupt),
+        FuzzCmd::Election(a) => fuzz_election(a, &interrupt),
+        FuzzCmd::Quadrant(a) => fuzz_quadrant(a, &interrupt),
     }
 }
 
-fn fuzz_consensus(a: &ConsensusArgs) -> SwarmResult<()> {
+/// Ctrl-C (or SIGTERM) between seeds: stop there, report what ran, exit 130.
+fn interrupted(interrupt: &Receiver<()>) -> bool {
+    interrupt.try_recv().is_ok()
+}
+
+fn stopped() -> SwarmError {
+    SwarmError::Interrupted("interrupted: stopped between seeds".into())
+}
+
+fn fuzz_consensus(a: &ConsensusArgs, interrupt: &Receiver<()>) -> SwarmResult<()> {
     if a.seeds == 0 {
         return Err(user("--seeds: expected at least 1, got 0".into()));
     }
@@ -80,7 +91,14 @@ fn fuzz_consensus(a: &ConsensusArgs) -> SwarmResult<()> {
     let mut ticks = 0u64;
     let mut recovered: Vec<u64> = Vec::new();
     let (mut left_for_notes, mut unsent) = (0u64, 0u64);
+    let mut ran = 0u64;
+    let mut stop = false;
     for seed in a.start_seed..end {
+        if interrupted(interrupt) {
+            stop = true;
+            break;
+        }
+        ran += 1;
         let case = consensus::draw(seed);
         let out = consensus::run(&case, a.dump.is_some());
         ticks += out.ticks;
@@ -149,30 +167,32 @@ fn fuzz_consensus(a: &ConsensusArgs) -> SwarmResult<()> {
     let mut rec = recovered.clone();
     println!(
         "{} seeds ({}..{}), {} failed; {:.1} seeds/s, {:.0} ticks/s; median recovery after heal {} ticks",
-        a.seeds,
+        ran,
         a.start_seed,
-        end - 1,
+        (a.start_seed + ran).saturating_sub(1),
         failed.len(),
-        a.seeds as f64 / secs.max(1e-9),
+        ran as f64 / secs.max(1e-9),
         ticks as f64 / secs.max(1e-9),
         election::median(&mut rec).map_or("-".to_string(), |m| m.to_string())
     );
     println!(
         "messages left unprocessed for lack of note room: {left_for_notes}; dropped for lack of free frames: {unsent}"
     );
-    if failed.is_empty() {
-        Ok(())
-    } else {
+    if !failed.is_empty() {
         Err(SwarmError::Internal(anyhow::anyhow!(
             "{} of {} seeds failed: {:?}",
             failed.len(),
-            a.seeds,
+            ran,
             failed
         )))
+    } else if stop {
+        Err(stopped())
+    } else {
+        Ok(())
     }
 }
 
-fn fuzz_election(a: &ElectionArgs) -> SwarmResult<()> {
+fn fuzz_election(a: &ElectionArgs, interrupt: &Receiver<()>) -> SwarmResult<()> {
     if a.runs == 0 {
         return Err(user("--runs: expected at least 1, got 0".into()));
     }
@@ -195,6 +215,10 @@ fn fuzz_election(a: &ElectionArgs) -> SwarmResult<()> {
         for &loss in &a.loss {
             let (mut first, mut re) = (Vec::new(), Vec::new());
             for seed in a.start_seed..end {
+                if interrupted(interrupt) {
+                    pb.finish_and_clear();
+                    return Err(stopped());
+                }
                 let r = election::measure(n, loss, seed, a.leader_wait);
                 first.extend(r.first_leader);
                 re.extend(r.reelection);
@@ -234,7 +258,7 @@ fn fuzz_election(a: &ElectionArgs) -> SwarmResult<()> {
     Ok(())
 }
 
-fn fuzz_quadrant(a: &QuadrantArgs) -> SwarmResult<()> {
+fn fuzz_quadrant(a: &QuadrantArgs, interrupt: &Receiver<()>) -> SwarmResult<()> {
     if a.trials == 0 {
         return Err(user("--trials: expected at least 1, got 0".into()));
     }
@@ -255,6 +279,10 @@ fn fuzz_quadrant(a: &QuadrantArgs) -> SwarmResult<()> {
         let (mut one, mut all_see, mut unique, mut agree, mut leaders) = (0, 0, 0, 0, 0);
         let (mut connected, mut one_connected) = (0, 0);
         for seed in a.start_seed..end {
+            if interrupted(interrupt) {
+                pb.finish_and_clear();
+                return Err(stopped());
+            }
             let t = quadrant::trial(n, a.loss, a.area_per_robot, seed);
             one += (t.leaders == 1) as u64;
             all_see += t.all_see_all as u64;
