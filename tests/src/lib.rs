@@ -95,6 +95,52 @@ pub fn bytes(dir: &Path, name: &str) -> Vec<u8> {
     std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{}/{name}: {e}", dir.display()))
 }
 
+/// `--set`s for the lossy, late, jittery radio the mode-equality tests use.
+pub const LOSSY_RADIO: [&str; 6] = [
+    "--set",
+    "radio.loss=0.3",
+    "--set",
+    "radio.delay_ticks=3",
+    "--set",
+    "radio.jitter_ticks=2",
+];
+
+/// Runs `config` for `ticks` with the lossy radio (plus `extra`) as processes and in-process
+/// under `tmp`, asserts that each of `files` holds the same bytes in both run directories and
+/// that loss happened, and returns the in-process run's metrics.
+pub fn assert_modes_agree_with_loss(
+    tmp: &Path,
+    config: &str,
+    ticks: u64,
+    extra: &[&str],
+    files: &[&str],
+) -> serde_json::Value {
+    let ticks = ticks.to_string();
+    let mut args = vec!["--ticks", ticks.as_str()];
+    args.extend_from_slice(&LOSSY_RADIO);
+    args.extend_from_slice(extra);
+    let run = |dir: &Path, in_process: bool| {
+        let mut a = vec!["run", config, "--out", dir.to_str().unwrap()];
+        a.extend_from_slice(&args);
+        if in_process {
+            a.push("--in-process");
+        }
+        assert_ok(&swarm(&a, Duration::from_secs(600)));
+        metrics(dir)
+    };
+    let (a, b) = (tmp.join("processes"), tmp.join("in-process"));
+    run(&a, false);
+    let m = run(&b, true);
+    assert!(m["radio"]["dropped_loss"].as_u64().unwrap() > 0, "{m}");
+    for file in files {
+        assert!(
+            bytes(&a, file) == bytes(&b, file),
+            "{config}: {file} differs between modes"
+        );
+    }
+    m
+}
+
 /// Files a run left behind in the iceoryx2 root and /dev/shm.
 pub fn leftovers(run_id: &str) -> Vec<String> {
     let mut found = Vec::new();

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 use std::time::Duration;
-use swarmrt_tests::{assert_ok, bytes, metrics, swarm};
+use swarmrt_tests::{assert_modes_agree_with_loss, assert_ok, bytes, metrics, swarm};
 
 const LIMIT: Duration = Duration::from_secs(300);
 
@@ -76,27 +76,12 @@ fn crossing_flocks_each_keep_their_cohesion_and_get_across() {
 #[test]
 fn calibrated_world_records_are_identical_in_both_modes_with_loss_and_delay() {
     let tmp = tempfile::tempdir().unwrap();
-    let sets = [
-        "--ticks",
-        "300",
-        "--set",
-        "radio.loss=0.3",
-        "--set",
-        "radio.delay_ticks=3",
-        "--set",
-        "radio.jitter_ticks=2",
-    ];
-    let a = tmp.path().join("processes");
-    let b = tmp.path().join("in-process");
-    run("configs/flocking_calibrated.toml", &a, &sets);
-    let mut in_process = sets.to_vec();
-    in_process.push("--in-process");
-    let m = run("configs/flocking_calibrated.toml", &b, &in_process);
-    assert!(m["radio"]["dropped_loss"].as_u64().unwrap() > 0, "{m}");
-    for file in ["trajectory.csv", "events.jsonl", "flocking.csv"] {
-        assert!(
-            bytes(&a, file) == bytes(&b, file),
-            "{file} differs between modes"
-        );
-    }
+    let files = ["trajectory.csv", "events.jsonl", "flocking.csv"];
+    assert_modes_agree_with_loss(
+        tmp.path(),
+        "configs/flocking_calibrated.toml",
+        300,
+        &[],
+        &files,
+    );
 }

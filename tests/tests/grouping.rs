@@ -5,7 +5,7 @@
 use std::f64::consts::TAU;
 use std::path::Path;
 use std::time::Duration;
-use swarmrt_tests::{assert_ok, bytes, metrics, swarm};
+use swarmrt_tests::{assert_modes_agree_with_loss, assert_ok, bytes, metrics, swarm};
 
 const LIMIT: Duration = Duration::from_secs(600);
 
@@ -87,31 +87,10 @@ fn s1_eight_robot_processes_end_on_a_circle_at_the_goal_without_a_collision() {
 #[test]
 fn s2_records_are_identical_in_both_modes_with_loss_and_delay() {
     let tmp = tempfile::tempdir().unwrap();
-    let sets = [
-        "--ticks",
-        "500",
-        "--set",
-        "radio.loss=0.3",
-        "--set",
-        "radio.delay_ticks=3",
-        "--set",
-        "radio.jitter_ticks=2",
-    ];
-    let a = tmp.path().join("processes");
-    let b = tmp.path().join("in-process");
-    run("configs/grouping_s2.toml", &a, &sets);
-    let mut in_process = sets.to_vec();
-    in_process.push("--in-process");
-    let m = run("configs/grouping_s2.toml", &b, &in_process);
-    assert!(m["radio"]["dropped_loss"].as_u64().unwrap() > 0, "{m}");
+    let files = ["trajectory.csv", "events.jsonl"];
+    let m = assert_modes_agree_with_loss(tmp.path(), "configs/grouping_s2.toml", 500, &[], &files);
     // By tick 500 the three groups have chosen their leaders and formed.
     assert_eq!(m["grouping"]["groups"], 3, "{}", m["grouping"]);
-    for file in ["trajectory.csv", "events.jsonl"] {
-        assert!(
-            bytes(&a, file) == bytes(&b, file),
-            "{file} differs between modes"
-        );
-    }
 }
 
 #[test]

@@ -41,10 +41,11 @@ done
 # circle fits in it.
 for n in 8 12 16 20 25 30; do
   r=$(python3 -c "import math; print(round(max(1.0, $n * 0.75 / (2 * math.pi)), 2))")
-  d=$(python3 -c "import math; print(round(max(2.2, 0.9 * math.sqrt($n)), 2))")
+  d=$(python3 -c "import math; print(round(max(2.2, 1.1 * math.sqrt($n)), 2))")
   "$SWARM" sweep configs/grouping_s1.toml --vary robots.count=$n --seeds 3 --start-seed 1 \
     --jobs "$JOBS" --in-process --set behaviour.radius=$r --set robots.start.scatter=$d \
     --set "map.goal.radius=$(python3 -c "print($r + 0.6)")" --set scenario.ticks=4000 \
+    --set "robots.start.x=$(python3 -c "print(max(5.0, $d + 1.0))")" \
     --out "$OUT/scale_$n" "${M[@]}"
 done
 
