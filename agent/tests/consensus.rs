@@ -269,18 +269,22 @@ decide_tick = 5
         };
     }
     o.neighbours_len = 3;
+    // Every tick (claim_period 1) it broadcasts the best claim it knows: its own, as nobody
+    // else claims anything, before and after deciding.
     let mut claims = 0;
     for t in 0..10 {
         o.tick = t;
         let cmd = a.step(&o);
         for f in cmd.outbox() {
-            match RadioMsg::decode(f.bytes()) {
-                Some(RadioMsg::Consensus(m)) if m.kind() == "quad_claim" => claims += 1,
-                _ => {}
+            if let Some(RadioMsg::Consensus(ConsensusMsg::QuadLeader { score, leader, .. })) =
+                RadioMsg::decode(f.bytes())
+            {
+                assert_eq!((score, leader), (3, 0), "tick {t}");
+                claims += 1;
             }
         }
     }
-    assert_eq!(claims, 5, "one claim per tick before deciding");
+    assert_eq!(claims, 10, "one claim per tick");
     let q = a.consensus().unwrap().quadrant().unwrap();
     assert_eq!((q.score(), q.leader()), (3, Some(0)));
 }

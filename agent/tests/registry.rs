@@ -86,13 +86,17 @@ fn defaults_are_filled_in_declaration_order_and_round_trip() {
 
 #[test]
 fn every_behaviour_is_listed_with_its_keys() {
-    assert_eq!(registry::kinds(), ["goto", "formation", "flocking"]);
+    assert_eq!(
+        registry::kinds(),
+        ["goto", "formation", "flocking", "grouping"]
+    );
     let keys = registry::param_keys();
     for k in [
         "behaviour.beacon_period",
         "behaviour.turn_deg",
         "behaviour.verdict_ticks",
         "behaviour.migration_deg",
+        "behaviour.cluster_distance",
     ] {
         assert!(keys.iter().any(|x| x == k), "{k} in {keys:?}");
     }

@@ -118,3 +118,35 @@ fn s2_three_groups_explore_and_every_robot_reaches_the_goal() {
         "{g}"
     );
 }
+
+/// A robot nobody senses stays alone: it leads a group of one, explores its own sector and,
+/// told where the goal is, gets there on its own.
+#[test]
+fn a_robot_nobody_senses_leads_itself_and_reaches_the_goal_alone() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("loner");
+    let m = run(
+        "configs/grouping_s2.toml",
+        &dir,
+        &[
+            "--in-process",
+            "--set",
+            "robots.count=12",
+            "--set",
+            "robots.start.groups=[{x=5.0,y=5.0},{x=25.0,y=6.0},{x=6.0,y=24.0},{x=26.0,y=27.0}]",
+            "--set",
+            "robots.start.group_sizes=[4,4,3,1]",
+        ],
+    );
+    let g = &m["grouping"];
+    assert_eq!(g["groups"], 4, "{g}");
+    let alone = g["per_group"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["leader"] == 11)
+        .unwrap_or_else(|| panic!("robot 11 leads its own group: {g}"));
+    assert_eq!(alone["robots"], 1, "{alone}");
+    assert_eq!(alone["reached"], 1, "{alone}");
+    assert_eq!(m["collisions"], 0, "{m}");
+}
