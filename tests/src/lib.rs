@@ -95,6 +95,15 @@ pub fn bytes(dir: &Path, name: &str) -> Vec<u8> {
     std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{}/{name}: {e}", dir.display()))
 }
 
+/// Runs `swarm run <config> --out <dir> <extra>...` (within 10 minutes), asserts it succeeded and
+/// returns its metrics.
+pub fn run_config(config: &str, dir: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["run", config, "--out", dir.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    assert_ok(&swarm(&args, Duration::from_secs(600)));
+    metrics(dir)
+}
+
 /// `--set`s for the lossy, late, jittery radio the mode-equality tests use.
 pub const LOSSY_RADIO: [&str; 6] = [
     "--set",
@@ -120,13 +129,11 @@ pub fn assert_modes_agree_with_loss(
     args.extend_from_slice(&LOSSY_RADIO);
     args.extend_from_slice(extra);
     let run = |dir: &Path, in_process: bool| {
-        let mut a = vec!["run", config, "--out", dir.to_str().unwrap()];
-        a.extend_from_slice(&args);
+        let mut a = args.clone();
         if in_process {
             a.push("--in-process");
         }
-        assert_ok(&swarm(&a, Duration::from_secs(600)));
-        metrics(dir)
+        run_config(config, dir, &a)
     };
     let (a, b) = (tmp.join("processes"), tmp.join("in-process"));
     run(&a, false);

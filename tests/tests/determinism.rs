@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
-use swarmrt_tests::{assert_ok, bytes, metrics, swarm};
+use swarmrt_tests::{LOSSY_RADIO, assert_ok, bytes, metrics, swarm};
 
 const LIMIT: Duration = Duration::from_secs(180);
 
@@ -47,16 +47,8 @@ fn processes_twice_and_in_process_give_identical_bytes() {
 #[test]
 fn lossy_delayed_radio_is_just_as_reproducible() {
     let tmp = tempfile::tempdir().unwrap();
-    let lossy = [
-        "--seed",
-        "4",
-        "--set",
-        "radio.loss=0.3",
-        "--set",
-        "radio.delay_ticks=3",
-        "--set",
-        "radio.jitter_ticks=2",
-    ];
+    let mut lossy = vec!["--seed", "4"];
+    lossy.extend_from_slice(&LOSSY_RADIO);
     let p1 = run(tmp.path(), "p1", &lossy);
     let p2 = run(tmp.path(), "p2", &lossy);
     let mut ip_args = lossy.to_vec();

@@ -2,16 +2,10 @@
 //! and identical records in both modes with a lossy, late radio.
 
 use std::path::Path;
-use std::time::Duration;
-use swarmrt_tests::{assert_modes_agree_with_loss, assert_ok, bytes, metrics, swarm};
-
-const LIMIT: Duration = Duration::from_secs(300);
+use swarmrt_tests::{assert_modes_agree_with_loss, bytes, run_config};
 
 fn run(config: &str, dir: &Path, extra: &[&str]) -> serde_json::Value {
-    let mut args = vec!["run", config, "--out", dir.to_str().unwrap()];
-    args.extend_from_slice(extra);
-    assert_ok(&swarm(&args, LIMIT));
-    metrics(dir)
+    run_config(config, dir, extra)
 }
 
 /// `flocking.csv` as (flock, cohesion) per row.

@@ -3,16 +3,10 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
-use swarmrt_tests::{assert_ok, bytes, metrics, swarm};
-
-const LIMIT: Duration = Duration::from_secs(300);
+use swarmrt_tests::{bytes, run_config};
 
 fn run(config: &str, dir: &Path, extra: &[&str]) -> serde_json::Value {
-    let mut args = vec!["run", config, "--out", dir.to_str().unwrap()];
-    args.extend_from_slice(extra);
-    assert_ok(&swarm(&args, LIMIT));
-    metrics(dir)
+    run_config(config, dir, extra)
 }
 
 /// Robots with their lidar on, per tick.
