@@ -89,18 +89,12 @@ pub struct SweepArgs {
     /// First seed [default: the config's scenario.seed].
     #[arg(long)]
     pub start_seed: Option<u64>,
-    /// Runs at once.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
-    pub jobs: u64,
-    /// Run every scenario with the same cores in one process each, no IPC (identical results).
-    #[arg(long)]
-    pub in_process: bool,
+    /// How the runs are made.
+    #[command(flatten)]
+    pub pool: PoolArgs,
     /// The sweep directory [default: sweeps/<scenario>-<time>/]; an existing one is resumed.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Override a config key in every run, e.g. --set scenario.ticks=300 (repeatable).
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    pub set: Vec<String>,
     /// A metric to plot and summarise, e.g. radio.dropped (repeatable) [default:
     /// reached_target, down, collisions, and steps_to_target, radio.delivered when present].
     #[arg(long = "metric", value_name = "NAME")]
@@ -154,15 +148,24 @@ pub struct TuneArgs {
     /// Largest velocity component, as a fraction of the parameter's bound width.
     #[arg(long, default_value_t = 1.0)]
     pub vmax: f64,
-    /// Runs at once.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
-    pub jobs: u64,
-    /// Run every evaluation with the same cores in one process, no IPC (identical results).
-    #[arg(long)]
-    pub in_process: bool,
+    /// How the runs are made.
+    #[command(flatten)]
+    pub pool: PoolArgs,
     /// The tune directory [default: runs/tune-<scenario>-<time>/]; an existing one is resumed.
     #[arg(long)]
     pub out: Option<PathBuf>,
+}
+
+/// The run pool of `swarm sweep` and `swarm tune`: how many runs at once, in which mode, with
+/// which overrides.
+#[derive(Args, Debug, Clone)]
+pub struct PoolArgs {
+    /// Runs at once.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
+    pub jobs: u64,
+    /// Run every scenario with the same cores in one process each, no IPC (identical results).
+    #[arg(long)]
+    pub in_process: bool,
     /// Override a config key in every run, e.g. --set scenario.ticks=300 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,

@@ -57,7 +57,7 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
         .map(|v| plan::parse_vary(v))
         .collect::<Result<Vec<_>, _>>()
         .map_err(SwarmError::User)?;
-    for s in &args.set {
+    for s in &args.pool.set {
         let key = s.split_once('=').map_or(s.as_str(), |(k, _)| k).trim();
         if varies.iter().any(|v| v.key == key) {
             return Err(SwarmError::User(format!(
@@ -65,14 +65,14 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
             )));
         }
     }
-    let base = load_config(&args.config, &args.set)?;
+    let base = load_config(&args.config, &args.pool.set)?;
     let start = args.start_seed.unwrap_or(base.scenario.seed);
     let plan = Plan::new(&varies, start, args.seeds).map_err(SwarmError::User)?;
 
     // Every combination must resolve before anything runs.
     let mut configs: Vec<Config> = Vec::with_capacity(plan.combos.len());
     for c in 0..plan.combos.len() {
-        let mut set = args.set.clone();
+        let mut set = args.pool.set.clone();
         set.extend(plan.overrides(c));
         let cfg = load_config(&args.config, &set).map_err(|e| match e {
             SwarmError::User(m) if plan.combos.len() > 1 => {
@@ -138,16 +138,16 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
             plan.seeds.len(),
             all_runs.len() - todo.len(),
             todo.len(),
-            args.jobs.min(todo.len().max(1) as u64),
-            mode(args.in_process),
+            args.pool.jobs.min(todo.len().max(1) as u64),
+            mode(args.pool.in_process),
         ));
     }
 
     let opts = PoolOptions {
         swarm: std::env::current_exe()
             .map_err(|e| anyhow::anyhow!("cannot locate the swarm executable: {e}"))?,
-        in_process: args.in_process,
-        jobs: args.jobs as usize,
+        in_process: args.pool.in_process,
+        jobs: args.pool.jobs as usize,
     };
     let mut failures: Vec<String> = Vec::new();
     let mut stopped_from_outside: Vec<String> = Vec::new();
@@ -501,7 +501,7 @@ fn write_reports(
     let head = SummaryHead {
         scenario: &base.scenario.name,
         command,
-        mode: mode(args.in_process),
+        mode: mode(args.pool.in_process),
     };
     let md = report::summary_md(&head, &table, &groups, &metrics, &plots);
     let tmp = out.join("summary.md.tmp");

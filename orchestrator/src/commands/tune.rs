@@ -60,7 +60,7 @@ impl Tune<'_> {
 
     /// `--set` overrides putting the parameters at `position`.
     fn overrides(&self, position: &[f64]) -> Vec<String> {
-        let mut set = self.args.set.clone();
+        let mut set = self.args.pool.set.clone();
         set.extend(self.params.iter().zip(position).map(|(p, &x)| p.set(x)));
         set
     }
@@ -104,8 +104,8 @@ pub fn tune(args: &TuneArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
             s.particles,
             cached,
             total - cached.min(total),
-            args.jobs,
-            mode(args.in_process),
+            args.pool.jobs,
+            mode(args.pool.in_process),
         ));
     }
     let opts = Options {
@@ -121,8 +121,8 @@ pub fn tune(args: &TuneArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
     let pool = PoolOptions {
         swarm: std::env::current_exe()
             .map_err(|e| anyhow::anyhow!("cannot locate the swarm executable: {e}"))?,
-        in_process: args.in_process,
-        jobs: args.jobs as usize,
+        in_process: args.pool.in_process,
+        jobs: args.pool.jobs as usize,
     };
     let mut history = History {
         scenario: tune.scenario.clone(),
@@ -364,9 +364,9 @@ fn check(args: &TuneArgs) -> SwarmResult<Tune<'_>> {
         vmax: args.vmax,
     };
     opts.reevaluations().map_err(SwarmError::User)?;
-    let base = load_config(&args.config, &args.set)?;
-    let params =
-        space::resolve(&args.param, &args.config, &args.set, &base).map_err(SwarmError::User)?;
+    let base = load_config(&args.config, &args.pool.set)?;
+    let params = space::resolve(&args.param, &args.config, &args.pool.set, &base)
+        .map_err(SwarmError::User)?;
     check_fitness(&args.fitness, &base)?;
     let seeds = match args.seeds {
         None => None,
@@ -513,7 +513,7 @@ fn summary(tune: &Tune, pso: Option<&Pso>, done: &[EvalRow], complete: bool) -> 
         "failed_evaluations": count(Status::Failed),
         "missing_evaluations": count(Status::Missing),
         "complete": complete,
-        "mode": mode(tune.args.in_process),
+        "mode": mode(tune.args.pool.in_process),
         "best": best,
     })
 }
