@@ -159,21 +159,24 @@ fn processes_of(m: &serde_json::Value, robot: u64) -> Vec<(u64, String, bool)> {
 const RESTARTS: &str =
     "faults.restart=[{tick=250,robot=5,down_ticks=15},{tick=400,robot=\"leader\"}]";
 
+/// raft_election for 500 ticks with [`RESTARTS`] and one more `--set`, in both modes.
+fn run_restarts(tmp: &Path, set: &str) -> (PathBuf, PathBuf) {
+    let args = [
+        "configs/raft_election.toml",
+        "--ticks",
+        "500",
+        "--set",
+        set,
+        "--set",
+        RESTARTS,
+    ];
+    run_both_modes(tmp, &args)
+}
+
 #[test]
 fn freezes_and_restarts_replay_bit_for_bit_with_real_processes() {
     let tmp = tempfile::tempdir().unwrap();
-    let (p, q) = run_both_modes(
-        tmp.path(),
-        &[
-            "configs/raft_election.toml",
-            "--ticks",
-            "500",
-            "--set",
-            "faults.freeze=[{robot=3,from=100,to=150}]",
-            "--set",
-            RESTARTS,
-        ],
-    );
+    let (p, q) = run_restarts(tmp.path(), "faults.freeze=[{robot=3,from=100,to=150}]");
     let m = metrics(&p);
     assert_eq!(m["reproducible"], true, "{m}");
     assert_eq!(m["unscheduled_deaths"], serde_json::json!([]), "{m}");
@@ -232,18 +235,7 @@ fn freezes_and_restarts_replay_bit_for_bit_with_real_processes() {
 #[test]
 fn without_stable_storage_a_restarted_robot_forgets_and_the_checker_says_so() {
     let tmp = tempfile::tempdir().unwrap();
-    let (p, q) = run_both_modes(
-        tmp.path(),
-        &[
-            "configs/raft_election.toml",
-            "--ticks",
-            "500",
-            "--set",
-            "consensus.storage=false",
-            "--set",
-            RESTARTS,
-        ],
-    );
+    let (p, q) = run_restarts(tmp.path(), "consensus.storage=false");
     let c = &metrics(&p)["consensus"];
     assert!(
         c["amnesia_restarts"].as_u64().unwrap() >= 1,

@@ -243,30 +243,36 @@ fn a_second_run_into_a_running_runs_directory_fails_at_once() {
     assert_ok(&short_run(&dir, &["--in-process", "--force"]));
 }
 
+/// `swarm <args>` started from `cwd` with its output captured, not waited for.
+fn spawn_piped(cwd: &Path, args: &[&str]) -> std::process::Child {
+    Command::new(swarm_bin())
+        .current_dir(cwd)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
 #[test]
 fn two_runs_started_together_into_one_directory_cannot_both_pass() {
     let tmp = tempfile::tempdir().unwrap();
     for i in 0..4 {
         let dir = tmp.path().join(format!("run{i}"));
-        let spawn = || {
-            Command::new(swarm_bin())
-                .current_dir(workspace())
-                .args([
-                    "run",
-                    "configs/goto_simple.toml",
-                    "--in-process",
-                    "--ticks",
-                    "50",
-                ])
-                .arg("--out")
-                .arg(&dir)
-                .stdin(Stdio::null())
-                .stdout(Stdio::piped())
-                .stderr(Stdio::piped())
-                .spawn()
-                .unwrap()
-        };
-        let (a, b) = (spawn(), spawn());
+        let args = [
+            "run",
+            "configs/goto_simple.toml",
+            "--in-process",
+            "--ticks",
+            "50",
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        let (a, b) = (
+            spawn_piped(&workspace(), &args),
+            spawn_piped(&workspace(), &args),
+        );
         let outs = [wait_with_watchdog(a, LIMIT), wait_with_watchdog(b, LIMIT)];
         let codes: Vec<_> = outs.iter().map(|o| o.status.code()).collect();
         let won = outs.iter().filter(|o| o.status.success()).count();
@@ -289,18 +295,17 @@ fn default_directories_of_runs_started_in_the_same_second_differ() {
     let config = workspace().join("configs/goto_simple.toml");
     let mut same_second = false;
     for _ in 0..5 {
-        let spawn = || {
-            Command::new(swarm_bin())
-                .current_dir(tmp.path())
-                .args(["run", "--in-process", "--ticks", "5"])
-                .arg(&config)
-                .stdin(Stdio::null())
-                .stdout(Stdio::piped())
-                .stderr(Stdio::piped())
-                .spawn()
-                .unwrap()
-        };
-        let (a, b) = (spawn(), spawn());
+        let args = [
+            "run",
+            "--in-process",
+            "--ticks",
+            "5",
+            config.to_str().unwrap(),
+        ];
+        let (a, b) = (
+            spawn_piped(tmp.path(), &args),
+            spawn_piped(tmp.path(), &args),
+        );
         let outs = [wait_with_watchdog(a, LIMIT), wait_with_watchdog(b, LIMIT)];
         let dirs: Vec<PathBuf> = outs
             .iter()
