@@ -211,6 +211,31 @@ pub struct Planner {
     positions: Vec<Vec<[f64; 3]>>,
     positions_gen: Vec<u32>,
     generation: u32,
+    /// Per cell: (generation, slot, g) of the first state of that cell expanded.
+    first: Vec<(u32, u32, f64)>,
+    /// Other vehicles near the cell being expanded.
+    near: Vec<[f64; 3]>,
+}
+
+/// Longest wait chain tried when testing dominance (see [`Planner::plan`]).
+const MAX_DOMINANCE_WAIT: u32 = 16;
+
+/// Fills the cache of other vehicles' positions at relative slot `t` once per search.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn fill_positions(
+    positions: &mut [Vec<[f64; 3]>],
+    gens: &mut [u32],
+    generation: u32,
+    res: &Reservations,
+    vehicle: u32,
+    base: i64,
+    t: u32,
+) {
+    if gens[t as usize] != generation {
+        res.positions_at(base + i64::from(t), vehicle, &mut positions[t as usize]);
+        gens[t as usize] = generation;
+    }
 }
 
 impl Planner {
@@ -310,6 +335,12 @@ impl Planner {
             self.positions.resize(horizon as usize + 2, Vec::new());
             self.positions_gen.resize(horizon as usize + 2, u32::MAX);
         }
+        if self.first.len() < ncells {
+            self.first.resize(ncells, (0, 0, 0.0));
+        }
+        let off = potential.is_off();
+        let steady = reservations.steady_from(job.vehicle);
+        let near_r2 = (potential.range() + 3f64.sqrt() * d + 1e-9).powi(2);
         let start_idx = grid.index(job.start);
         let h0 = h_of(job.start);
         self.nodes.push(Node {
@@ -342,6 +373,53 @@ impl Planner {
                 return Ok(self.reconstruct(grid, ni, job.start_slot, expansions));
             }
             self.nodes[ni].closed = true;
+            let idx = node.cell as usize;
+            let cell = grid.cell_at(idx);
+            let centre = grid.centre(cell);
+            // Dominance: if this cell was expanded earlier at slot t0 with g0 and waiting
+            // there from t0 to now is allowed and strictly cheaper than this state's g, the
+            // wait chain reaches this very state for less; expanding it cannot help.
+            // In the steady part of time (nothing changes any more), an earlier-or-equal slot
+            // with no larger g dominates outright: the same continuation is valid earlier.
+            let rec = self.first[idx];
+            if rec.0 != self.generation {
+                self.first[idx] = (self.generation, node.t, node.g);
+            } else if rec.1 <= node.t && base + i64::from(rec.1) >= steady && rec.2 <= node.g {
+                continue;
+            } else if rec.1 < node.t && node.t - rec.1 <= MAX_DOMINANCE_WAIT {
+                let mut gw = rec.2;
+                let mut chain = true;
+                for t in rec.1 + 1..=node.t {
+                    if reservations.any_at(idx)
+                        && reservations.occupied(idx, base + i64::from(t), job.vehicle)
+                    {
+                        chain = false;
+                        break;
+                    }
+                    let p = if off {
+                        0.0
+                    } else {
+                        fill_positions(
+                            &mut self.positions,
+                            &mut self.positions_gen,
+                            self.generation,
+                            reservations,
+                            job.vehicle,
+                            base,
+                            t,
+                        );
+                        potential.sum(centre, &self.positions[t as usize])
+                    };
+                    gw += params.wait_cost + p;
+                    if gw + 1e-9 >= node.g {
+                        chain = false;
+                        break;
+                    }
+                }
+                if chain {
+                    continue;
+                }
+            }
             expansions += 1;
             if expansions > params.max_expansions {
                 return Err(PlanError::NoRoute {
@@ -352,21 +430,31 @@ impl Planner {
                 continue;
             }
             let t1 = node.t + 1;
-            let idx = node.cell as usize;
-            let cell = grid.cell_at(idx);
-            if !potential.is_off() && self.positions_gen[t1 as usize] != self.generation {
-                reservations.positions_at(slot + 1, job.vehicle, &mut self.positions[t1 as usize]);
-                self.positions_gen[t1 as usize] = self.generation;
+            self.near.clear();
+            if !off {
+                fill_positions(
+                    &mut self.positions,
+                    &mut self.positions_gen,
+                    self.generation,
+                    reservations,
+                    job.vehicle,
+                    base,
+                    t1,
+                );
+                for q in &self.positions[t1 as usize] {
+                    let d2 = (q[0] - centre[0]).powi(2)
+                        + (q[1] - centre[1]).powi(2)
+                        + (q[2] - centre[2]).powi(2);
+                    if d2 <= near_r2 {
+                        self.near.push(*q);
+                    }
+                }
             }
-            let others: &[[f64; 3]] = if potential.is_off() {
-                &[]
-            } else {
-                &self.positions[t1 as usize]
-            };
+            let others: &[[f64; 3]] = &self.near;
 
             // Wait.
             if !(reservations.any_at(idx) && reservations.occupied(idx, slot + 1, job.vehicle)) {
-                let cost = params.wait_cost + potential.sum(grid.centre(cell), others);
+                let cost = params.wait_cost + potential.sum(centre, others);
                 let h = h_of(cell);
                 Self::relax(
                     &mut self.nodes,

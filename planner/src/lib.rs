@@ -10,6 +10,7 @@
 //! - [`prioritised`]: plan a swarm vehicle by vehicle, and check the result;
 //! - [`route`]: timed routes and their one-byte-per-step radio form;
 //! - [`spline`]: the smoothed trajectory a vehicle follows (section 2.2);
+//! - [`scenes`]: the paper's scene and a 100-vehicle one, for examples and benchmarks;
 //! - [`params`], [`error`]: tunables with the paper's defaults, the one error type.
 //!
 //! The paper's experiment: 3 UAVs in a 10 × 15 × 5 m space, d = 1 m, a = 10, b = 50, δ = 1 s.
@@ -54,6 +55,7 @@ pub mod params;
 pub mod potential;
 pub mod prioritised;
 pub mod route;
+pub mod scenes;
 pub mod spline;
 
 pub use astar::{Job, Planner, plan};

@@ -50,8 +50,17 @@ pub struct Reservations {
     /// Cell offsets within `clearance` of a cell (always includes (0,0,0)).
     zone: Vec<[i32; 3]>,
     spans: Vec<Vec<Span>>,
-    /// Per vehicle: the cells it has spans in (to remove them) and what it does.
-    vehicles: BTreeMap<u32, (Vec<u32>, Vec<Presence>)>,
+    /// Per vehicle: the cells it has spans in (to remove them), what it does, and the first
+    /// slot from which its reservations and position no longer change.
+    vehicles: BTreeMap<u32, Known>,
+}
+
+/// Everything recorded about one vehicle.
+#[derive(Debug, Clone, PartialEq, Default)]
+struct Known {
+    cells: Vec<u32>,
+    presences: Vec<Presence>,
+    steady_from: i64,
 }
 
 impl Reservations {
@@ -94,10 +103,23 @@ impl Reservations {
         ]
     }
 
+    fn known(&mut self, vehicle: u32) -> &mut Known {
+        self.vehicles.entry(vehicle).or_insert_with(|| Known {
+            steady_from: i64::MIN,
+            ..Known::default()
+        })
+    }
+
     /// Adds `[from, to]` (already padded) at `c` and every cell of its safe-distance zone.
     fn reserve(&mut self, vehicle: u32, c: Cell, from: i64, to: i64) {
         let [nx, ny, nz] = self.dims.map(i32::from);
-        let entry = self.vehicles.entry(vehicle).or_default();
+        let entry = self.vehicles.entry(vehicle).or_insert_with(|| Known {
+            steady_from: i64::MIN,
+            ..Known::default()
+        });
+        if to != FOREVER {
+            entry.steady_from = entry.steady_from.max(to + 1);
+        }
         for off in &self.zone {
             let (i, j, k) = (
                 i32::from(c.i) + off[0],
@@ -109,7 +131,7 @@ impl Reservations {
             }
             let idx = (i + nx * (j + ny * k)) as usize;
             self.spans[idx].push(Span { from, to, vehicle });
-            entry.0.push(idx as u32);
+            entry.cells.push(idx as u32);
         }
     }
 
@@ -130,11 +152,9 @@ impl Reservations {
             self.reserve(vehicle, c, s0 - self.pad, to);
             k = m + 1;
         }
-        self.vehicles
-            .entry(vehicle)
-            .or_default()
-            .1
-            .push(Presence::Route(route.clone()));
+        let known = self.known(vehicle);
+        known.steady_from = known.steady_from.max(i64::from(route.end_slot()));
+        known.presences.push(Presence::Route(route.clone()));
     }
 
     /// A vehicle hovering at `cell` over slots `[from, until]` (padded by δ).
@@ -145,28 +165,22 @@ impl Reservations {
             i64::from(from) - self.pad,
             i64::from(until) + self.pad,
         );
-        self.vehicles
-            .entry(vehicle)
-            .or_default()
-            .1
-            .push(Presence::Hold { cell, from, until });
+        let known = self.known(vehicle);
+        known.steady_from = known.steady_from.max(i64::from(until) + 1);
+        known.presences.push(Presence::Hold { cell, from, until });
     }
 
     /// A dead vehicle at `cell`: occupied at all times. It is an obstacle, not a swarm member,
     /// so it adds no potential.
     pub fn add_dead(&mut self, vehicle: u32, cell: Cell) {
         self.reserve(vehicle, cell, i64::MIN, FOREVER);
-        self.vehicles
-            .entry(vehicle)
-            .or_default()
-            .1
-            .push(Presence::Dead);
+        self.known(vehicle).presences.push(Presence::Dead);
     }
 
     /// Forgets everything about `vehicle`.
     pub fn remove_vehicle(&mut self, vehicle: u32) {
-        if let Some((cells, _)) = self.vehicles.remove(&vehicle) {
-            for idx in cells {
+        if let Some(known) = self.vehicles.remove(&vehicle) {
+            for idx in known.cells {
                 self.spans[idx as usize].retain(|s| s.vehicle != vehicle);
             }
         }
@@ -210,11 +224,11 @@ impl Reservations {
     /// its interval. Dead vehicles are not included.
     pub fn positions_at(&self, slot: i64, asker: u32, out: &mut Vec<[f64; 3]>) {
         out.clear();
-        for (&v, (_, presences)) in &self.vehicles {
+        for (&v, known) in &self.vehicles {
             if v == asker {
                 continue;
             }
-            for p in presences {
+            for p in &known.presences {
                 let cell = match p {
                     Presence::Route(r) if slot >= i64::from(r.start_slot) => Some(r.cell_at(slot)),
                     Presence::Hold { cell, from, until }
@@ -230,6 +244,18 @@ impl Reservations {
                 }
             }
         }
+    }
+
+    /// First slot from which nothing `asker` can see changes any more: every reservation of
+    /// the others is either over or lasts for ever, and their positions are fixed. From
+    /// then on the problem is static, which lets the search merge states of one cell.
+    pub fn steady_from(&self, asker: u32) -> i64 {
+        self.vehicles
+            .iter()
+            .filter(|(v, _)| **v != asker)
+            .map(|(_, k)| k.steady_from)
+            .max()
+            .unwrap_or(i64::MIN)
     }
 
     /// Vehicles with any reservation, in id order.
