@@ -256,23 +256,18 @@ impl Planner {
                 continue;
             }
             let off = route::offset(code);
-            let mut sweep = Vec::new();
-            for a in 0..8 {
+            // Every corner of the box spanned by the move, but the origin; the target last.
+            let mut sweep: Vec<[i32; 3]> = Vec::new();
+            for a in 1..8 {
                 let o = [
                     off[0] * (a & 1),
                     off[1] * ((a >> 1) & 1),
                     off[2] * ((a >> 2) & 1),
                 ];
-                if o == [0, 0, 0] || (a != 7 && o == off) {
-                    continue;
+                if o != [0, 0, 0] && o != off && !sweep.contains(&o) {
+                    sweep.push(o);
                 }
-                if sweep.iter().any(|s: &[i32; 3]| *s == o) {
-                    continue;
-                }
-                sweep.push(o);
             }
-            // The target last.
-            sweep.retain(|o| *o != off);
             sweep.push(off);
             let nz = off.iter().filter(|x| **x != 0).count();
             self.moves.push(Move {

@@ -323,7 +323,7 @@ impl Grid {
             let n = f64::from(self.dims[a]);
             let s = (((lo[a] - pad - self.min[a]) / self.d).floor()).max(0.0);
             let e = (((hi[a] + pad - self.min[a]) / self.d).floor() + 1.0).min(n);
-            if !(s < e) {
+            if s.partial_cmp(&e) != Some(std::cmp::Ordering::Less) {
                 return None;
             }
             r[a] = s as usize..e as usize;

@@ -100,7 +100,7 @@ impl Route {
     pub fn position_at(&self, grid: &Grid, slot_seconds: f64, t: f64) -> [f64; 3] {
         let u = t / slot_seconds - f64::from(self.start_slot);
         let last = self.cells.len() - 1;
-        if !(u > 0.0) {
+        if u.is_nan() || u <= 0.0 {
             return grid.centre(self.cells[0]);
         }
         if u >= last as f64 {

@@ -71,15 +71,19 @@ pub fn swarm_grid() -> Grid {
     g
 }
 
-/// 100 vehicles: starts on the west edge, goals on the east edge in reversed order, so
-/// every path crosses every other.
+/// 100 vehicles: starts on the west face in a 25 × 4 lattice (4 m apart across, 5 m apart
+/// up, about r* = 3.9 m), goals on the east face in reversed order, so every path crosses
+/// the others.
 pub fn swarm_jobs() -> Vec<Job> {
     (0..100u16)
-        .map(|v| Job {
-            vehicle: u32::from(v),
-            start: Cell::new(1, v, 2 + 3 * (v % 5)),
-            goal: Cell::new(98, 99 - v, 2 + 3 * ((v + 2) % 5)),
-            start_slot: 0,
+        .map(|v| {
+            let (col, row) = (v % 25, v / 25);
+            Job {
+                vehicle: u32::from(v),
+                start: Cell::new(1, 2 + 4 * col, 2 + 5 * row),
+                goal: Cell::new(98, 2 + 4 * (24 - col), 2 + 5 * (3 - row)),
+                start_slot: 0,
+            }
         })
         .collect()
 }

@@ -81,7 +81,7 @@ impl Spline {
     fn locate(&self, t: f64) -> Option<(usize, f64)> {
         let u = (t - self.t0) / self.h;
         let segs = self.x.len().saturating_sub(1);
-        if segs == 0 || !(u > 0.0) || u >= segs as f64 {
+        if segs == 0 || u.is_nan() || u <= 0.0 || u >= segs as f64 {
             return None;
         }
         let k = (u.floor() as usize).min(segs - 1);

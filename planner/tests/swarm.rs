@@ -6,7 +6,7 @@ mod common;
 use proptest::prelude::*;
 use swarmrt_planner::{
     Cell, Grid, Job, PlanParams, Reservations, Route, Trajectory, conflicts, min_separation,
-    plan_all,
+    plan_all, scenes,
 };
 
 /// Pairs of routes with one vehicle in a cell within `pad` slots of the other being there,
@@ -123,33 +123,10 @@ fn conflicts_counts_a_forced_clash() {
 /// crossing paths. All three plan, no conflicts, smoothed paths stay in free cells.
 #[test]
 fn paper_scene_three_uavs_cross_without_conflict() {
-    let mut grid = Grid::new([0.0; 3], [10.0, 15.0, 5.0], 1.0).unwrap();
-    let r = 0.3;
-    grid.block_box([0.0, 5.0, 0.0], [4.0, 6.0, 4.0], r);
-    grid.block_box([6.0, 9.0, 0.0], [10.0, 10.0, 5.0], r);
-    grid.block_cylinder([7.0, 5.5], 0.7, 0.0, 5.0, r);
-    grid.block_cylinder([3.0, 11.0], 0.5, 0.0, 3.0, r);
+    let grid = scenes::paper_grid();
     let params = PlanParams::default();
-    let jobs = [
-        Job {
-            vehicle: 1,
-            start: Cell::new(1, 1, 2),
-            goal: Cell::new(8, 13, 2),
-            start_slot: 0,
-        },
-        Job {
-            vehicle: 2,
-            start: Cell::new(5, 1, 2),
-            goal: Cell::new(5, 13, 2),
-            start_slot: 0,
-        },
-        Job {
-            vehicle: 3,
-            start: Cell::new(8, 1, 2),
-            goal: Cell::new(1, 13, 2),
-            start_slot: 0,
-        },
-    ];
+    let jobs = scenes::paper_jobs();
+    assert!(grid.blocked_count() > 0);
     let fixed = Reservations::new(&grid, &params).unwrap();
     let routes: Vec<(u32, Route)> = plan_all(&grid, &jobs, fixed, &params)
         .into_iter()
