@@ -118,6 +118,41 @@ fn main() {
         route.cost,
         route.expansions
     );
+    for (name, p) in [
+        (
+            "ours, one route, eps = 1",
+            PlanParams {
+                epsilon: 1.0,
+                ..params.clone()
+            },
+        ),
+        (
+            "ours, one route, a = b = 0 (no potential)",
+            PlanParams {
+                a: 0.0,
+                b: 0.0,
+                ..params.clone()
+            },
+        ),
+    ] {
+        let mut res = Reservations::new(&grid, &p).unwrap();
+        for job in &jobs[1..] {
+            let r = planner.plan(&grid, &res, job, &p).unwrap();
+            res.add_route(job.vehicle, &r);
+        }
+        let r = planner.plan(&grid, &res, &jobs[0], &p).unwrap();
+        let us = median_us(2001, || {
+            black_box(planner.plan(&grid, &res, black_box(&jobs[0]), &p).unwrap());
+        });
+        println!(
+            "   {:<40} {:>10.1} {:>10.0} {:>8.2} {:>8}",
+            name,
+            us,
+            30000.0 / us,
+            r.cost,
+            r.expansions
+        );
+    }
     let all_us = median_us(501, || {
         black_box(plan_all(
             &grid,
@@ -182,17 +217,18 @@ fn main() {
         "epsilon", "time us", "cost", "expand", "cost/opt", "time/opt"
     );
     let mut base: Option<(f64, f64)> = None;
+    // The other two routes are planned once at ε = 0, so every row faces the same traffic.
+    let mut res = Reservations::new(&hard, &params).unwrap();
+    for job in &jobs[1..] {
+        if let Ok(r) = planner.plan(&hard, &res, job, &params) {
+            res.add_route(job.vehicle, &r);
+        }
+    }
     for eps in [0.0, 0.1, 0.5, 1.0] {
         let p = PlanParams {
             epsilon: eps,
             ..params.clone()
         };
-        let mut res = Reservations::new(&hard, &p).unwrap();
-        for job in &jobs[1..] {
-            if let Ok(r) = planner.plan(&hard, &res, job, &p) {
-                res.add_route(job.vehicle, &r);
-            }
-        }
         let r = planner.plan(&hard, &res, &jobs[0], &p).unwrap();
         let us = median_us(101, || {
             black_box(planner.plan(&hard, &res, &jobs[0], &p).unwrap());
@@ -234,6 +270,14 @@ fn main() {
             "a=10 b=50, eps=1",
             PlanParams {
                 epsilon: 1.0,
+                ..params.clone()
+            },
+        ),
+        (
+            "a=10 b=50, eps=1, cl=1",
+            PlanParams {
+                epsilon: 1.0,
+                clearance: 1.0,
                 ..params.clone()
             },
         ),

@@ -32,6 +32,18 @@
 //! ([`Reservations::free_from`]), so the vehicle can park there; an earlier pass through the
 //! goal is just a state like any other.
 //!
+//! Pruning (a time-expanded graph holds many copies of one cell): a popped state `(c, t)` is
+//! dropped unexpanded when the first expanded state of `c`, `(c, t0)` with cost `g0`,
+//! dominates it:
+//! - steady part of time (from [`Reservations::steady_from`] on nothing changes): `t0 ≤ t`
+//!   and `g0 ≤ g` — the same continuation is valid from `(c, t0)`, arriving earlier;
+//! - otherwise, when waiting at `c` from `t0` to `t` is allowed and its cost (wait_cost plus
+//!   the potential per slot) added to `g0` is strictly below `g` — the wait chain reaches this
+//!   very state for less.
+//!
+//! Both keep an optimal (resp. (1+ε)-bounded) route reachable; the Dijkstra property tests
+//! check it. `Route::expansions` counts expanded states, not dropped ones.
+//!
 //! Ties: among equal `f`, smaller `h` first, then first pushed first — fully deterministic.
 
 use std::cmp::Ordering;

@@ -20,7 +20,8 @@ use crate::spline::Trajectory;
 /// vehicles still waiting for their turn. Planning a vehicle drops its hold; a planned route is
 /// then fixed in the reservations (parked at its goal for ever). A vehicle that finds no route
 /// stays where it is: its start cell is reserved for ever, like a dead vehicle, so later
-/// routes avoid it.
+/// routes avoid it. `fixed` must have been built for this `grid` with these `params` (its δ
+/// and clearance are fixed at construction).
 pub fn plan_all(
     grid: &Grid,
     jobs: &[Job],
