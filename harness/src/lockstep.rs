@@ -122,7 +122,7 @@ pub fn run_recorded(
 ) -> std::io::Result<(swarmrt_world::WorldMetrics, bool)> {
     let mut run = Lockstep::new(cfg)
         .map_err(|e| std::io::Error::other(format!("key `{}`: {}", e.key, e.message)))?;
-    let mut recorder = swarmrt_world::records::Recorder::create(dir)?;
+    let mut recorder = swarmrt_world::records::Recorder::create(dir, cfg.robots.aerial.is_some())?;
     let events = run.drain_events();
     recorder.record(run.world.tick(), run.world.robots(), &events)?;
     let mut stopped = false;

@@ -7,7 +7,7 @@
 use iceoryx2::prelude::*;
 
 /// Bumped whenever the layout or meaning of a message changes.
-pub const PROTOCOL_VERSION: u32 = 3;
+pub const PROTOCOL_VERSION: u32 = 4;
 /// Largest radio payload in bytes; larger frames are refused by [`Command::push_frame`].
 pub const MAX_PAYLOAD: usize = 128;
 /// Frames one robot may put into one [`Command`]; the radio capacity `K` is at most this.
@@ -170,6 +170,8 @@ pub struct Observation {
     pub y: f64,
     /// Estimated heading in radians.
     pub theta: f64,
+    /// Estimated height in metres (aerial robots; 0 for ground robots).
+    pub z: f64,
     /// Distance to the goal, valid when `goal_visible != 0`.
     pub goal_range: f64,
     /// Bearing to the goal in the robot frame, valid when `goal_visible != 0`.
@@ -198,6 +200,7 @@ impl Observation {
             x: 0.0,
             y: 0.0,
             theta: 0.0,
+            z: 0.0,
             goal_range: 0.0,
             goal_bearing: 0.0,
             lidar: [0.0; MAX_LIDAR_RAYS],
@@ -275,6 +278,13 @@ pub struct Command {
     pub v: f64,
     /// Turn rate in rad/s (clamped by the world).
     pub omega: f64,
+    /// Aerial robots only (ground robots leave it 0 and use `v`, `omega`): the velocity in
+    /// the world frame, m/s: east ...
+    pub vx: f64,
+    /// ... north ...
+    pub vy: f64,
+    /// ... and up. Limits: `robots.max_speed` on `(vx, vy)`, `max_vertical_speed` on `vz`.
+    pub vz: f64,
     /// Non-zero to have the lidar on for the next observation.
     pub lidar_on: u8,
     /// Number of valid frames in `outbox`.
@@ -309,6 +319,9 @@ impl Command {
             pid: 0,
             v: 0.0,
             omega: 0.0,
+            vx: 0.0,
+            vy: 0.0,
+            vz: 0.0,
             lidar_on: 0,
             outbox_len: 0,
             outbox: [Frame::EMPTY; MAX_OUTBOX],

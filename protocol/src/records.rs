@@ -103,6 +103,9 @@ pub enum FaultKind {
 
 /// Header line of `trajectory.csv`.
 pub const TRAJECTORY_HEADER: &str = "tick,id,x,y,theta,v,omega,lidar,state\n";
+/// Header line of `trajectory.csv` for aerial robots: `z` (height) and `vz` (vertical speed)
+/// added; `v` is the horizontal speed and `omega` the heading's rate of change.
+pub const TRAJECTORY_HEADER_AERIAL: &str = "tick,id,x,y,z,theta,v,vz,omega,lidar,state\n";
 
 /// One robot at one tick (a `trajectory.csv` row).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -115,6 +118,8 @@ pub struct Row {
     pub x: f64,
     /// y, metres.
     pub y: f64,
+    /// Height, metres (0 when the records have no `z` column: ground robots).
+    pub z: f64,
     /// Heading, radians.
     pub theta: f64,
     /// Lidar on for this tick's observation.
@@ -132,6 +137,7 @@ pub struct Columns {
     id: usize,
     x: usize,
     y: usize,
+    z: Option<usize>,
     theta: usize,
     lidar: usize,
     state: usize,
@@ -153,6 +159,7 @@ impl Columns {
             id: at("id")?,
             x: at("x")?,
             y: at("y")?,
+            z: at("z").ok(),
             theta: at("theta")?,
             lidar: at("lidar")?,
             state: at("state")?,
@@ -172,6 +179,10 @@ impl Columns {
             id: f[self.id].parse().ok()?,
             x: f[self.x].parse().ok()?,
             y: f[self.y].parse().ok()?,
+            z: match self.z {
+                Some(k) => f[k].parse().ok()?,
+                None => 0.0,
+            },
             theta: f[self.theta].parse().ok()?,
             lidar: f[self.lidar] == "1",
             state,

@@ -82,6 +82,10 @@ pub struct MapConfig {
     /// Convex polygon obstacles (points counter-clockwise or clockwise).
     #[serde(default)]
     pub polygons: Vec<PolygonObstacle>,
+    /// Ceiling in metres: aerial robots fly in `[0, height]` (required with
+    /// `[robots.aerial]`; ground robots ignore it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<f64>,
 }
 
 /// The goal: a disc robots try to reach.
@@ -94,6 +98,10 @@ pub struct Goal {
     pub y: f64,
     /// A robot whose centre is within this radius has reached the goal.
     pub radius: f64,
+    /// Height of the goal's centre for aerial robots (default: the robot's start height);
+    /// an aerial robot reaches it within `radius` in 3D.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub z: Option<f64>,
 }
 
 /// A circle obstacle.
@@ -106,6 +114,10 @@ pub struct CircleObstacle {
     pub y: f64,
     /// Radius.
     pub r: f64,
+    /// Height in metres from the ground (default: a wall of any height). An aerial robot
+    /// flies over an obstacle lower than itself; ground robots treat every obstacle as a wall.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<f64>,
 }
 
 /// An axis-aligned rectangle obstacle.
@@ -120,6 +132,10 @@ pub struct RectObstacle {
     pub x_max: f64,
     /// Top edge.
     pub y_max: f64,
+    /// Height in metres from the ground (default: a wall of any height). An aerial robot
+    /// flies over an obstacle lower than itself; ground robots treat every obstacle as a wall.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<f64>,
 }
 
 /// A convex polygon obstacle.
@@ -128,6 +144,10 @@ pub struct RectObstacle {
 pub struct PolygonObstacle {
     /// Vertices `[x, y]`, at least three.
     pub points: Vec<[f64; 2]>,
+    /// Height in metres from the ground (default: a wall of any height). An aerial robot
+    /// flies over an obstacle lower than itself; ground robots treat every obstacle as a wall.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<f64>,
 }
 
 /// `[robots]`.
@@ -160,6 +180,30 @@ pub struct RobotsConfig {
     /// Sensor noise.
     #[serde(default)]
     pub noise: NoiseConfig,
+    /// Present for aerial robots (UAVs): a height, a holonomic velocity command in the world
+    /// frame, 3D contacts; absent for ground robots (unicycles in the plane).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aerial: Option<AerialConfig>,
+}
+
+/// `[robots.aerial]`: what makes robots aerial. Their horizontal speed is limited by
+/// `robots.max_speed`, their climb and descent by `max_vertical_speed`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AerialConfig {
+    /// Climb and descent speed limit in m/s.
+    pub max_vertical_speed: f64,
+    /// Start height in metres of robots whose start group gives none.
+    pub start_z: f64,
+}
+
+impl Default for AerialConfig {
+    fn default() -> Self {
+        AerialConfig {
+            max_vertical_speed: 1.0,
+            start_z: 1.0,
+        }
+    }
 }
 
 /// Start layout: derived from the count, so changing `robots.count` alone stays valid.
@@ -215,6 +259,13 @@ pub struct StartGroup {
     /// only it, and only it counts as reached); default `map.goal`. Radius: `map.goal.radius`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub goal: Option<[f64; 2]>,
+    /// Start height of its robots when they are aerial (default `robots.aerial.start_z`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub z: Option<f64>,
+    /// Height of its goal when its robots are aerial (default `map.goal.z`, else the start
+    /// height).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub goal_z: Option<f64>,
 }
 
 impl Default for StartLayout {

@@ -114,16 +114,34 @@ impl Config {
     /// The goal robot `id` seeks: its start group's own `goal`, else `map.goal`.
     pub fn goal_of(&self, id: u32) -> crate::Goal {
         let g = self.map.goal;
-        match self
-            .robots
+        let group = self.robots.start.groups.get(self.start_group(id));
+        let mut goal = match group.and_then(|s| s.goal) {
+            Some([x, y]) => crate::Goal { x, y, ..g },
+            None => g,
+        };
+        if self.robots.aerial.is_some() {
+            goal.z = Some(
+                group
+                    .and_then(|s| s.goal_z)
+                    .or(g.z)
+                    .unwrap_or(self.start_z(id)),
+            );
+        }
+        goal
+    }
+
+    /// The height robot `id` starts at: 0 for ground robots; for aerial ones its start
+    /// group's `z`, else `robots.aerial.start_z`.
+    pub fn start_z(&self, id: u32) -> f64 {
+        let Some(aerial) = self.robots.aerial else {
+            return 0.0;
+        };
+        self.robots
             .start
             .groups
             .get(self.start_group(id))
-            .and_then(|s| s.goal)
-        {
-            Some([x, y]) => crate::Goal { x, y, ..g },
-            None => g,
-        }
+            .and_then(|s| s.z)
+            .unwrap_or(aerial.start_z)
     }
 
     /// Every goal of the run: `map.goal` (when some robot seeks it) and each group's own.

@@ -250,12 +250,61 @@ impl Config {
         range_u64("radio.jitter_ticks", q.jitter_ticks as u64, 0, 10_000)?;
         range_u64("radio.capacity", q.capacity as u64, 1, MAX_OUTBOX as u64)?;
 
+        self.validate_heights()?;
         self.faults.validate(self.robots.count)?;
 
         if let Some(c) = &self.consensus {
             c.validate(self)?;
         }
 
+        Ok(())
+    }
+
+    /// Obstacle heights, the ceiling and, for aerial robots, their limits and every start and
+    /// goal height inside `[0, map.height]`.
+    fn validate_heights(&self) -> Result<(), KeyError> {
+        let m = &self.map;
+        let heights = (m.circles.iter().map(|c| ("circles", c.height)))
+            .chain(m.rectangles.iter().map(|r| ("rectangles", r.height)))
+            .chain(m.polygons.iter().map(|p| ("polygons", p.height)));
+        let mut index = std::collections::BTreeMap::<&str, usize>::new();
+        for (kind, h) in heights {
+            let i = index.entry(kind).or_default();
+            if let Some(h) = h {
+                range_f(&format!("map.{kind}[{i}].height"), h, 1e-3, 1e6)?;
+            }
+            *i += 1;
+        }
+        if let Some(h) = m.height {
+            range_f("map.height", h, 1e-3, 1e6)?;
+        }
+        let Some(aerial) = &self.robots.aerial else {
+            return Ok(());
+        };
+        let ceiling = m.height.ok_or_else(|| {
+            (
+                "map.height".to_string(),
+                "a ceiling in metres (required with [robots.aerial])".to_string(),
+            )
+        })?;
+        range_f(
+            "robots.aerial.max_vertical_speed",
+            aerial.max_vertical_speed,
+            0.0,
+            1000.0,
+        )?;
+        range_f("robots.aerial.start_z", aerial.start_z, 0.0, ceiling)?;
+        if let Some(z) = m.goal.z {
+            range_f("map.goal.z", z, 0.0, ceiling)?;
+        }
+        for (i, g) in self.robots.start.groups.iter().enumerate() {
+            if let Some(z) = g.z {
+                range_f(&format!("robots.start.groups[{i}].z"), z, 0.0, ceiling)?;
+            }
+            if let Some(z) = g.goal_z {
+                range_f(&format!("robots.start.groups[{i}].goal_z"), z, 0.0, ceiling)?;
+            }
+        }
         Ok(())
     }
 

@@ -15,6 +15,11 @@ const WALL: f64 = 1.0;
 /// Obstacles and walls of one map.
 pub struct Map {
     obstacles: Compound,
+    /// Height of each shape of `obstacles`, in order (walls and obstacles without a height
+    /// are infinitely tall).
+    heights: Vec<f64>,
+    /// Whether some obstacle has a finite height (else the 3D clearance is the 2D one).
+    any_height: bool,
 }
 
 /// Why a map could not be built.
@@ -62,14 +67,18 @@ impl Map {
                 SharedShape::cuboid(w / 2.0 + WALL, WALL / 2.0),
             ),
         ];
+        let mut heights = vec![f64::INFINITY; shapes.len()];
+        let tall = |h: Option<f64>| h.unwrap_or(f64::INFINITY);
         for c in &cfg.circles {
             shapes.push((Isometry2::translation(c.x, c.y), SharedShape::ball(c.r)));
+            heights.push(tall(c.height));
         }
         for r in &cfg.rectangles {
             shapes.push((
                 Isometry2::translation((r.x_min + r.x_max) / 2.0, (r.y_min + r.y_max) / 2.0),
                 SharedShape::cuboid((r.x_max - r.x_min) / 2.0, (r.y_max - r.y_min) / 2.0),
             ));
+            heights.push(tall(r.height));
         }
         for (i, p) in cfg.polygons.iter().enumerate() {
             let points: Vec<Point2<f64>> =
@@ -79,10 +88,32 @@ impl Map {
                 message: "expected a polygon with non-zero area".to_string(),
             })?;
             shapes.push((Isometry2::identity(), SharedShape::new(poly)));
+            heights.push(tall(p.height));
         }
         Ok(Map {
             obstacles: Compound::new(shapes),
+            any_height: heights.iter().any(|h| h.is_finite()),
+            heights,
         })
+    }
+
+    /// Distance from the point `p` at height `z` to the nearest obstacle or wall, each a
+    /// prism from the ground up to its height (0 when inside one). For aerial robots.
+    pub fn clearance_3d(&self, p: (f64, f64), z: f64) -> f64 {
+        if !self.any_height {
+            return self.clearance(p);
+        }
+        let point = Point2::new(p.0, p.1);
+        self.obstacles
+            .shapes()
+            .iter()
+            .zip(&self.heights)
+            .map(|((pose, shape), &h)| {
+                let flat = shape.distance_to_point(pose, &point, true);
+                let above = (z - h).max(0.0);
+                (flat * flat + above * above).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Distance from `p` to the nearest obstacle or wall (0 when inside one).
@@ -125,23 +156,61 @@ mod tests {
                 x: 9.0,
                 y: 9.0,
                 radius: 0.5,
+                z: None,
             },
             circles: vec![CircleObstacle {
                 x: 5.0,
                 y: 5.0,
                 r: 1.0,
+                height: None,
             }],
             rectangles: vec![RectObstacle {
                 x_min: 1.0,
                 y_min: 7.0,
                 x_max: 2.0,
                 y_max: 8.0,
+                height: None,
             }],
             polygons: vec![PolygonObstacle {
                 points: vec![[7.0, 1.0], [8.0, 1.0], [7.5, 2.0]],
+                height: None,
             }],
+            height: None,
         })
         .unwrap()
+    }
+
+    #[test]
+    fn an_aerial_robot_clears_a_low_obstacle_from_above() {
+        let mut cfg = MapConfig {
+            bounds: [0.0, 0.0, 10.0, 10.0],
+            goal: Goal {
+                x: 9.0,
+                y: 9.0,
+                radius: 0.5,
+                z: None,
+            },
+            circles: vec![],
+            rectangles: vec![RectObstacle {
+                x_min: 4.0,
+                y_min: 4.0,
+                x_max: 6.0,
+                y_max: 6.0,
+                height: Some(2.0),
+            }],
+            polygons: vec![],
+            height: Some(5.0),
+        };
+        let m = Map::build(&cfg).unwrap();
+        assert_eq!(m.clearance_3d((5.0, 5.0), 1.0), 0.0);
+        assert!((m.clearance_3d((5.0, 5.0), 2.5) - 0.5).abs() < 1e-9);
+        // Diagonally off the top edge: sqrt(1^2 + 1^2).
+        assert!((m.clearance_3d((7.0, 5.0), 3.0) - 2f64.sqrt()).abs() < 1e-9);
+        // Walls are infinitely tall.
+        assert!((m.clearance_3d((0.3, 8.0), 4.0) - 0.3).abs() < 1e-9);
+        cfg.rectangles[0].height = None;
+        let m = Map::build(&cfg).unwrap();
+        assert_eq!(m.clearance_3d((5.0, 5.0), 4.0), 0.0);
     }
 
     #[test]
@@ -181,12 +250,15 @@ mod tests {
                 x: 1.0,
                 y: 1.0,
                 radius: 0.5,
+                z: None,
             },
             circles: vec![],
             rectangles: vec![],
             polygons: vec![PolygonObstacle {
                 points: vec![[1.0, 1.0], [2.0, 2.0], [3.0, 3.0]],
+                height: None,
             }],
+            height: None,
         };
         let e = Map::build(&cfg).err().unwrap();
         assert_eq!(e.key, "map.polygons[0].points");

@@ -9,12 +9,40 @@ use std::path::Path;
 
 use crate::world::{Event, Robot};
 
-/// Header line of `trajectory.csv`.
-pub const TRAJECTORY_HEADER: &str = "tick,id,x,y,theta,v,omega,lidar,state\n";
+pub use swarmrt_protocol::records::{TRAJECTORY_HEADER, TRAJECTORY_HEADER_AERIAL};
 
-/// Appends one row per robot for `tick` to `out` (fixed decimals: identical bytes in both modes).
-pub fn trajectory_rows(out: &mut String, tick: u64, robots: &[Robot]) {
+/// The header for robots that are `aerial` or not.
+pub fn trajectory_header(aerial: bool) -> &'static str {
+    if aerial {
+        TRAJECTORY_HEADER_AERIAL
+    } else {
+        TRAJECTORY_HEADER
+    }
+}
+
+/// Appends one row per robot for `tick` to `out` (fixed decimals: identical bytes in both
+/// modes), with the aerial columns when `aerial`.
+pub fn trajectory_rows(out: &mut String, tick: u64, robots: &[Robot], aerial: bool) {
     use std::fmt::Write as _;
+    if aerial {
+        for r in robots {
+            let _ = writeln!(
+                out,
+                "{tick},{},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{},{}",
+                r.id,
+                r.x,
+                r.y,
+                r.z,
+                r.theta,
+                r.v,
+                r.vz,
+                r.omega,
+                r.lidar_on as u8,
+                r.state.as_str()
+            );
+        }
+        return;
+    }
     for r in robots {
         let _ = writeln!(
             out,
@@ -44,18 +72,21 @@ pub struct Recorder {
     trajectory: File,
     events: File,
     buf: String,
+    aerial: bool,
 }
 
 impl Recorder {
-    /// Creates both files (truncating) in `dir` and writes the CSV header.
-    pub fn create(dir: &Path) -> std::io::Result<Recorder> {
+    /// Creates both files (truncating) in `dir` and writes the CSV header (with the aerial
+    /// columns when `aerial`).
+    pub fn create(dir: &Path, aerial: bool) -> std::io::Result<Recorder> {
         let mut trajectory = File::create(dir.join("trajectory.csv"))?;
-        trajectory.write_all(TRAJECTORY_HEADER.as_bytes())?;
+        trajectory.write_all(trajectory_header(aerial).as_bytes())?;
         let events = File::create(dir.join("events.jsonl"))?;
         Ok(Recorder {
             trajectory,
             events,
             buf: String::new(),
+            aerial,
         })
     }
 
@@ -73,7 +104,7 @@ impl Recorder {
     pub fn record(&mut self, tick: u64, robots: &[Robot], events: &[Event]) -> std::io::Result<()> {
         self.record_events(events)?;
         self.buf.clear();
-        trajectory_rows(&mut self.buf, tick, robots);
+        trajectory_rows(&mut self.buf, tick, robots, self.aerial);
         self.trajectory.write_all(self.buf.as_bytes())
     }
 }

@@ -119,7 +119,7 @@ pub fn run(
 ) -> Result<(), IpcError> {
     let n = cfg.robots.count as usize;
     let mut world = World::new(cfg, vocabulary).map_err(|e| format!("{}: {}", e.key, e.message))?;
-    let mut recorder = Recorder::create(out_dir)?;
+    let mut recorder = Recorder::create(out_dir, cfg.robots.aerial.is_some())?;
 
     match ipc::raise_fd_limit() {
         Ok(limit) if limit < 8 * n as u64 + 64 => {

@@ -200,6 +200,7 @@ fn fast_robot_does_not_tunnel_through_a_thin_wall() {
         y_min: 0.5,
         x_max: 4.05,
         y_max: 3.5,
+        height: None,
     });
     let mut w = World::new(&cfg, VOCABULARY).unwrap();
     drive(&mut w, 50.0, 0.0, 1); // 5 m in one tick

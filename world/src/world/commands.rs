@@ -27,6 +27,16 @@ impl World {
             return Err("non-finite speed");
         }
         let eps = 1e-9;
+        if let Some(aerial) = &lim.aerial {
+            if !(cmd.vx.is_finite() && cmd.vy.is_finite() && cmd.vz.is_finite()) {
+                return Err("non-finite speed");
+            }
+            if cmd.vx.hypot(cmd.vy) > lim.max_speed * (1.0 + eps) + eps
+                || cmd.vz.abs() > aerial.max_vertical_speed * (1.0 + eps) + eps
+            {
+                return Err("speed out of range");
+            }
+        }
         if cmd.v.abs() > lim.max_speed * (1.0 + eps) + eps
             || cmd.omega.abs() > lim.max_turn_rate * (1.0 + eps) + eps
         {

@@ -1,5 +1,6 @@
 //! Stage `contacts`: after the kinematics, two robots whose bodies overlap both go down (a
-//! robot that is not active is an obstacle and stays as it is).
+//! robot that is not active is an obstacle and stays as it is). Bodies are discs for ground
+//! robots and balls for aerial ones (ground robots all have height 0).
 
 use swarmrt_protocol::RobotState;
 
@@ -14,6 +15,7 @@ impl World {
         let tick = self.tick;
         let radius = self.cfg.robots.radius;
         let positions: Vec<(f64, f64)> = self.robots.iter().map(|r| (r.x, r.y)).collect();
+        let heights: Vec<f64> = self.robots.iter().map(|r| r.z).collect();
         let grid = Grid::build(&positions, 2.0 * radius);
         let mut pairs: Vec<(usize, usize)> = Vec::new();
         for i in 0..n {
@@ -23,7 +25,8 @@ impl World {
             grid.near(positions[i], 2.0 * radius, |j| {
                 if j != i {
                     let d = ((positions[j].0 - positions[i].0).powi(2)
-                        + (positions[j].1 - positions[i].1).powi(2))
+                        + (positions[j].1 - positions[i].1).powi(2)
+                        + (heights[j] - heights[i]).powi(2))
                     .sqrt();
                     if d < 2.0 * radius {
                         pairs.push((i.min(j), i.max(j)));

@@ -52,8 +52,12 @@ pub struct Robot {
     pub y: f64,
     /// True heading, radians in (-pi, pi].
     pub theta: f64,
-    /// Forward speed applied in the last step.
+    /// True height, metres (0 for ground robots).
+    pub z: f64,
+    /// Forward speed applied in the last step (an aerial robot's horizontal speed).
     pub v: f64,
+    /// Vertical speed applied in the last step (aerial robots).
+    pub vz: f64,
     /// Turn rate applied in the last step.
     pub omega: f64,
     /// Whether the lidar is on for the current observation.
@@ -153,7 +157,9 @@ impl World {
                 x,
                 y,
                 theta,
+                z: cfg.start_z(i as u32),
                 v: 0.0,
+                vz: 0.0,
                 omega: 0.0,
                 lidar_on: true,
                 state: RobotState::Active,

@@ -94,9 +94,11 @@ impl World {
     pub(super) fn check_goal(&mut self) {
         for r in &mut self.robots {
             let g = self.cfg.goal_of(r.id);
+            // Aerial robots reach their goal in 3D (goal_of gives them a height).
+            let dz = g.z.map_or(0.0, |z| r.z - z);
             if r.reached_tick.is_none()
                 && r.state == RobotState::Active
-                && (r.x - g.x).powi(2) + (r.y - g.y).powi(2) <= g.radius * g.radius
+                && (r.x - g.x).powi(2) + (r.y - g.y).powi(2) + dz * dz <= g.radius * g.radius
             {
                 r.reached_tick = Some(self.tick);
                 self.metrics.reached_target += 1;
@@ -169,6 +171,10 @@ impl ObserveCtx<'_> {
         o.x = r.x + gauss(rng, noise.pose);
         o.y = r.y + gauss(rng, noise.pose);
         o.theta = wrap_angle(r.theta + gauss(rng, noise.heading));
+        if self.cfg.robots.aerial.is_some() {
+            // Drawn after x, y and theta, so ground runs consume the same stream as before.
+            o.z = r.z + gauss(rng, noise.pose);
+        }
         if r.state != RobotState::Active {
             return;
         }

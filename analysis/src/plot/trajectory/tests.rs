@@ -29,12 +29,14 @@ radius = 0.2
         x: x0 + (x1 - x0) * 0.5,
         y: y0 + (y1 - y0) * 0.5,
         r: (y1 - y0) * 0.1,
+        height: None,
     });
     cfg.map.rectangles.push(RectObstacle {
         x_min: x0 + (x1 - x0) * 0.25,
         y_min: y0 + (y1 - y0) * 0.1,
         x_max: x0 + (x1 - x0) * 0.3,
         y_max: y0 + (y1 - y0) * 0.4,
+        height: None,
     });
     cfg.map.polygons.push(PolygonObstacle {
         points: vec![
@@ -42,6 +44,7 @@ radius = 0.2
             [x0 + (x1 - x0) * 0.75, y0 + (y1 - y0) * 0.7],
             [x0 + (x1 - x0) * 0.7, y0 + (y1 - y0) * 0.9],
         ],
+        height: None,
     });
     cfg
 }
