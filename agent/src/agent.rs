@@ -8,7 +8,7 @@ use crate::consensus::Consensus;
 use crate::consensus::raft::Persistent;
 use crate::consensus::{ConsensusMsg, Decision};
 use crate::inbox::Heard;
-use crate::registry::{self, Brain, Note, RadioMsg};
+use crate::registry::{self, Brain, Note, Out, RadioMsg, Tick};
 
 /// One robot's brain.
 pub struct Agent {
@@ -109,10 +109,23 @@ impl Agent {
             None => Vec::new(),
         };
         let mut notes: Vec<Note> = Vec::new();
-        self.brain
-            .step(obs, &mut self.heard, &decisions, &mut cmd, &mut notes);
+        let mut proposals: Vec<Decision> = Vec::new();
+        let tick = Tick {
+            obs,
+            heard: &mut self.heard,
+            decisions: &decisions,
+            leadership: self.consensus.as_ref().and_then(Consensus::leadership),
+        };
+        let mut out = Out {
+            notes: &mut notes,
+            proposals: &mut proposals,
+        };
+        self.brain.step(tick, &mut cmd, &mut out);
         match &mut self.consensus {
-            Some(c) => c.finish(&mut cmd, notes),
+            Some(c) => {
+                c.propose(&proposals);
+                c.finish(&mut cmd, notes)
+            }
             // A few small notes always fit the report.
             None => {
                 let _ = cmd.set_notes(&notes);

@@ -15,7 +15,7 @@ use swarmrt_protocol::Observation;
 use swarmrt_protocol::records::Records;
 use swarmrt_scenario::{Config, KeyError};
 
-use crate::consensus::Decision;
+use crate::consensus::{Decision, Leadership};
 use crate::inbox::Heard;
 
 /// A behaviour's `[behaviour]` parameters: a serde struct with `#[serde(default,
@@ -36,8 +36,12 @@ pub struct Act<M, N> {
     pub omega: f64,
     /// Lidar on for the next observation.
     pub lidar_on: bool,
+    /// Aerial robots: the velocity `[east, north, up]` in m/s in the world frame (`v` and
+    /// `omega` are for ground robots).
+    pub velocity: [f64; 3],
     frames: Vec<(u32, M)>,
     notes: Vec<N>,
+    proposals: Vec<Decision>,
 }
 
 impl<M, N> Default for Act<M, N> {
@@ -46,8 +50,10 @@ impl<M, N> Default for Act<M, N> {
             v: 0.0,
             omega: 0.0,
             lidar_on: false,
+            velocity: [0.0; 3],
             frames: Vec::new(),
             notes: Vec::new(),
+            proposals: Vec::new(),
         }
     }
 }
@@ -64,13 +70,27 @@ impl<M, N> Act<M, N> {
         self.notes.push(note);
     }
 
+    /// As Raft leader, proposes `decision` for the replicated log. Proposals beyond this
+    /// tick's note budget, or made by a robot that is not leader, are dropped: the behaviour
+    /// learns which ones were appended from the decisions applied later.
+    pub fn propose(&mut self, decision: Decision) {
+        self.proposals.push(decision);
+    }
+
     /// Clears it for the next tick, keeping the buffers.
     pub fn reset(&mut self) {
         self.v = 0.0;
         self.omega = 0.0;
         self.lidar_on = false;
+        self.velocity = [0.0; 3];
         self.frames.clear();
         self.notes.clear();
+        self.proposals.clear();
+    }
+
+    /// The decisions proposed this tick.
+    pub fn proposals(&self) -> &[Decision] {
+        &self.proposals
     }
 
     /// The messages to send, in order, and the notes.
@@ -106,6 +126,9 @@ pub trait Behaviour: Send + Sized + 'static {
     /// Acts on a swarm decision the consensus layer committed and applied. Called before
     /// `step` in the tick it was applied; behaviours that have no use for it ignore it.
     fn apply(&mut self, _decision: &Decision) {}
+
+    /// What this robot knows of the election this tick (Raft scenarios only), before `step`.
+    fn lead(&mut self, _leadership: &Leadership) {}
 
     /// Its own metrics, computed after the run from the records alone (so both modes give
     /// the same numbers): `(name, value)` for each name in [`Behaviour::METRICS`].

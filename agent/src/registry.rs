@@ -18,7 +18,7 @@ use swarmrt_scenario::{BehaviourSection, Config, ConfigError, KeyError};
 
 use crate::behaviour::{Act, Behaviour, Params, Series};
 pub use crate::behaviours::{BEHAVIOURS, Note, RadioMsg};
-use crate::consensus::{ConsensusNote, Decision};
+use crate::consensus::{ConsensusNote, Decision, Leadership};
 use crate::inbox::Heard;
 
 /// Connects a behaviour to its variants of the envelopes (written by `behaviours!`).
@@ -53,15 +53,30 @@ pub trait Plugin: Sync {
 /// A behaviour driven for one robot, its types erased: the agent hands it the tick's
 /// decoded radio messages and committed decisions, it fills the command and its notes.
 pub trait Brain: Send {
-    /// One tick; messages of other kinds are ignored.
-    fn step(
-        &mut self,
-        obs: &Observation,
-        heard: &mut Vec<Heard<RadioMsg>>,
-        decisions: &[Decision],
-        cmd: &mut Command,
-        notes: &mut Vec<Note>,
-    );
+    /// One tick; messages of other kinds are ignored. `leadership` is the election as this
+    /// robot knows it (Raft scenarios); the behaviour's proposals for the log go to
+    /// `proposals`.
+    fn step(&mut self, tick: Tick<'_>, cmd: &mut Command, out: &mut Out<'_>);
+}
+
+/// What a [`Brain`] is given for one tick.
+pub struct Tick<'a> {
+    /// This tick's observation.
+    pub obs: &'a Observation,
+    /// This tick's decoded radio messages (the brain takes its own kind).
+    pub heard: &'a mut Vec<Heard<RadioMsg>>,
+    /// Decisions committed and applied this tick.
+    pub decisions: &'a [Decision],
+    /// The election as this robot knows it (Raft scenarios).
+    pub leadership: Option<Leadership>,
+}
+
+/// What a [`Brain`] hands back besides the command.
+pub struct Out<'a> {
+    /// Its notes for the record.
+    pub notes: &'a mut Vec<Note>,
+    /// Its proposals for the replicated log.
+    pub proposals: &'a mut Vec<Decision>,
 }
 
 /// A behaviour as a registry entry (its types erased behind [`Plugin`]).
@@ -134,19 +149,16 @@ struct Driver<B: Behaviour> {
 }
 
 impl<B: Enveloped> Brain for Driver<B> {
-    fn step(
-        &mut self,
-        obs: &Observation,
-        heard: &mut Vec<Heard<RadioMsg>>,
-        decisions: &[Decision],
-        cmd: &mut Command,
-        notes: &mut Vec<Note>,
-    ) {
-        for d in decisions {
+    fn step(&mut self, tick: Tick<'_>, cmd: &mut Command, out: &mut Out<'_>) {
+        let obs = tick.obs;
+        for d in tick.decisions {
             self.behaviour.apply(d);
         }
+        if let Some(l) = &tick.leadership {
+            self.behaviour.lead(l);
+        }
         self.inbox.clear();
-        self.inbox.extend(heard.drain(..).filter_map(|h| {
+        self.inbox.extend(tick.heard.drain(..).filter_map(|h| {
             Some(Heard {
                 src: h.src,
                 sent_tick: h.sent_tick,
@@ -157,13 +169,15 @@ impl<B: Enveloped> Brain for Driver<B> {
         self.behaviour.step(obs, &self.inbox, &mut self.act);
         cmd.v = self.act.v;
         cmd.omega = self.act.omega;
+        [cmd.vx, cmd.vy, cmd.vz] = self.act.velocity;
         cmd.lidar_on = self.act.lidar_on as u8;
+        out.proposals.extend_from_slice(self.act.proposals());
         let (frames, mine) = self.act.drain();
         for (dst, msg) in frames {
             // A full outbox drops the frame, as the radio would.
             let _ = cmd.push_frame(dst, &B::wrap_msg(msg));
         }
-        notes.extend(mine.map(B::wrap_note));
+        out.notes.extend(mine.map(B::wrap_note));
     }
 }
 

@@ -24,6 +24,35 @@ pub enum Decision {
         /// Cruise speed in m/s.
         speed: f64,
     },
+    /// A part of one vehicle's planned route (seed 002): proposed by the leader, not by the
+    /// schedule; a vehicle flies only a route whose parts are all committed.
+    Route(RoutePart),
+}
+
+/// Most moves in one [`RoutePart`]: a part plus the AppendEntries header fits one radio frame.
+pub const ROUTE_PART_MOVES: usize = 32;
+
+/// Part `part` of `parts` of the route plan `plan` gives `vehicle`: from cell `start` at slot
+/// `start_slot`, one move per slot (`swarmrt_planner::Route::moves` codes: 13 waits, the
+/// others step to one of the 26 neighbouring cells).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RoutePart {
+    /// The plan (the leader's count of plans, higher is newer; a vehicle flies its newest).
+    pub plan: u32,
+    /// The vehicle (robot id).
+    pub vehicle: u32,
+    /// This part's index.
+    pub part: u8,
+    /// How many parts the route has.
+    pub parts: u8,
+    /// The slot at which the vehicle is in `start`.
+    pub start_slot: u32,
+    /// The cell `[i, j, k]` this part starts from.
+    pub start: [u16; 3],
+    /// Number of valid moves.
+    pub len: u8,
+    /// One move per slot; only `..len` are meaningful.
+    pub moves: [u8; ROUTE_PART_MOVES],
 }
 
 /// What one log entry holds.
@@ -43,6 +72,9 @@ pub enum Item {
     },
 }
 
+/// The `id` of a decision no schedule names (a behaviour proposed it).
+pub const UNSCHEDULED: u16 = u16::MAX;
+
 /// One replicated log entry.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Entry {
@@ -57,7 +89,7 @@ impl Entry {
     /// of the entry, so a checker can compare logs across robots from `events.jsonl` alone
     /// while each note stays a few bytes.
     pub fn digest(&self) -> u32 {
-        let mut buf = [0u8; 64];
+        let mut buf = [0u8; 160];
         let bytes = postcard::to_slice(self, &mut buf)
             .map(|b| &*b)
             .unwrap_or(&[]);

@@ -48,10 +48,24 @@ use swarmrt_scenario::consensus::{Algorithm, ConsensusConfig};
 
 use crate::inbox::Heard;
 use crate::registry::{Note, RadioMsg};
-pub use messages::{ConsensusMsg, Decision, Entry, Item};
+pub use messages::{ConsensusMsg, Decision, Entry, Item, ROUTE_PART_MOVES, RoutePart, UNSCHEDULED};
 pub use notes::{ConsensusNote, Role, SentCounts};
 use quadrant::Quadrant;
 use raft::{Persistent, Raft, RaftParams};
+
+/// What a behaviour knows of the election (Raft only).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Leadership {
+    /// This robot's current term.
+    pub term: u64,
+    /// The leader of that term, when this robot knows it.
+    pub leader: Option<u32>,
+    /// Whether this robot is that leader (and may propose).
+    pub is_leader: bool,
+    /// How many of the behaviour's proposals of the previous tick were appended to the log
+    /// (the first ones, in order; the behaviour proposes the others again).
+    pub appended: usize,
+}
 
 /// Every random draw of the cores comes from the run's shared seeded streams.
 pub use swarmrt_scenario::rng::{Rng, stream};
@@ -83,8 +97,8 @@ impl Notes {
     /// Encoded size of `n` as one element of the report's `Vec<Note>` (one byte for the
     /// `Note::Consensus` tag).
     pub fn cost(n: &ConsensusNote) -> usize {
-        let mut buf = [0u8; 96];
-        1 + postcard::to_slice(n, &mut buf).map_or(96, |b| b.len())
+        let mut buf = [0u8; 200];
+        1 + postcard::to_slice(n, &mut buf).map_or(200, |b| b.len())
     }
 
     /// Bytes still free (minus reservations).
@@ -139,6 +153,8 @@ pub struct Consensus {
     stats_every: u64,
     capacity: usize,
     tick: u64,
+    /// The behaviour's proposals appended last tick ([`Leadership::appended`]).
+    appended: usize,
 }
 
 /// Upper bound of a [`ConsensusNote::Sent`] note.
@@ -239,6 +255,7 @@ impl Consensus {
             stats_every: c.stats_every.max(1) as u64,
             capacity: cfg.radio.capacity as usize,
             tick: 0,
+            appended: 0,
         })
     }
 
@@ -317,6 +334,40 @@ impl Consensus {
         }
         self.notes.release(stats_bound);
         out
+    }
+
+    /// Who leads, as this robot knows it now (Raft only).
+    pub fn leadership(&self) -> Option<Leadership> {
+        let r = self.raft()?;
+        Some(Leadership {
+            term: r.term(),
+            leader: r.leader(),
+            is_leader: r.role() == Role::Leader,
+            appended: self.appended,
+        })
+    }
+
+    /// As leader, appends the decisions the behaviour proposed this tick, in order, as far as
+    /// this tick's note budget allows; returns how many were appended (the behaviour proposes
+    /// the rest again). Not leader: 0.
+    pub fn propose(&mut self, decisions: &[Decision]) -> usize {
+        self.appended = 0;
+        let Core::Raft(r) = &mut self.core else {
+            return 0;
+        };
+        // The statistics note `finish` may add must still fit.
+        let stats = sent_note_bound();
+        self.notes.reserve(stats);
+        let mut done = 0;
+        for &d in decisions {
+            if r.propose(UNSCHEDULED, d, &mut self.notes) != raft::Proposed::Appended {
+                break;
+            }
+            done += 1;
+        }
+        self.notes.release(stats);
+        self.appended = done;
+        done
     }
 
     /// Puts this tick's messages into the command's free frames (up to `radio.capacity`) and

@@ -18,7 +18,7 @@
 //!   message whose notes would not fit is left unprocessed, exactly as if the radio had lost
 //!   it, which Raft tolerates.
 
-use super::{ConsensusMsg, ConsensusNote, Decision, Entry, Item, Role};
+use super::{ConsensusMsg, ConsensusNote, Decision, Entry, Item, Role, UNSCHEDULED};
 use rand::Rng as _;
 use swarmrt_protocol::{BROADCAST, MAX_PAYLOAD};
 
@@ -842,12 +842,13 @@ impl Raft {
         );
     }
 
-    /// As leader, appends scheduled decision `id` unless it is in the log already.
+    /// As leader, appends scheduled decision `id` unless it is in the log already (a
+    /// decision with id [`UNSCHEDULED`] is always appended: its proposer keeps track).
     pub fn propose(&mut self, id: u16, decision: Decision, notes: &mut Notes) -> Proposed {
         if self.role != Role::Leader {
             return Proposed::NotLeader;
         }
-        if self.log.has_decision(id) {
+        if id != UNSCHEDULED && self.log.has_decision(id) {
             return Proposed::AlreadyInLog;
         }
         let index = self.log.last_index() + 1;

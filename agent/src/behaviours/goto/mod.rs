@@ -117,6 +117,7 @@ impl Behaviour for Goto {
                 self.avoid_side = None;
             }
             Decision::SetSpeed { speed } => self.params.speed = speed.max(0.0),
+            Decision::Route(_) => {}
         }
     }
 
