@@ -22,6 +22,18 @@ pub fn read(dir: &Path) -> anyhow::Result<Records> {
 
 /// Reads `trajectory.csv` back into one track per robot, in id order (for the plot).
 pub fn read_tracks(dir: &Path) -> anyhow::Result<Vec<RobotTrack>> {
+    read_tracks_in(dir, |r| (r.x, r.y))
+}
+
+/// [`read_tracks`] in the (y, z) plane, for the side view of an aerial run.
+pub fn read_side_tracks(dir: &Path) -> anyhow::Result<Vec<RobotTrack>> {
+    read_tracks_in(dir, |r| (r.y, r.z))
+}
+
+fn read_tracks_in(
+    dir: &Path,
+    plane: impl Fn(&swarmrt_protocol::records::Row) -> (f64, f64),
+) -> anyhow::Result<Vec<RobotTrack>> {
     let path = dir.join("trajectory.csv");
     let text =
         std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
@@ -34,8 +46,9 @@ pub fn read_tracks(dir: &Path) -> anyhow::Result<Vec<RobotTrack>> {
             points: Vec::new(),
             final_state: row.state,
         });
-        if t.points.last() != Some(&(row.x, row.y)) {
-            t.points.push((row.x, row.y));
+        let p = plane(&row);
+        if t.points.last() != Some(&p) {
+            t.points.push(p);
         }
         t.final_state = row.state;
     }

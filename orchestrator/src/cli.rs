@@ -22,6 +22,8 @@ pub enum Cmd {
     Run(RunArgs),
     /// Validate a config and print it fully resolved.
     Check(CheckArgs),
+    /// Plan the routes of a `planner` scenario (seed 002) without flying them.
+    Plan(PlanArgs),
     /// Remove the iceoryx2 files and shared memory of runs whose orchestrator is gone.
     Clean,
     /// Run a scenario over the cross product of varied keys and seeds; write sweep.csv and plots.
@@ -72,6 +74,19 @@ pub struct CheckArgs {
     /// Override any config key (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+}
+
+/// `swarm plan`.
+#[derive(Parser, Debug)]
+pub struct PlanArgs {
+    /// The scenario file (`behaviour.kind = "planner"`).
+    pub config: PathBuf,
+    /// Override any config key (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Print JSON for scripts.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// `swarm sweep`.

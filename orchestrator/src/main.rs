@@ -22,6 +22,7 @@ fn main() -> std::process::ExitCode {
     let result = match &cli.command {
         Cmd::Run(args) => commands::run::run(args, rx).map(|_| ()),
         Cmd::Check(args) => commands::check::check(args),
+        Cmd::Plan(args) => commands::plan::plan(args),
         Cmd::Clean => commands::clean::clean(),
         Cmd::Sweep(args) => commands::sweep::sweep(args, rx),
         Cmd::Tune(args) => commands::tune::tune(args, rx),

@@ -10,7 +10,7 @@ use swarmrt_scenario::Config;
 
 use crate::error::{SwarmError, SwarmResult};
 
-use swarmrt_analysis::plot::trajectory::write_trajectory_plots;
+use swarmrt_analysis::plot::trajectory::{write_side_view_plots, write_trajectory_plots};
 
 /// Creates `runs/<scenario>-s<seed>-<time>/`, with a numeric suffix if that exists already.
 pub fn default_dir(cfg: &Config) -> anyhow::Result<PathBuf> {
@@ -257,7 +257,17 @@ pub fn write_plots(dir: &Path, cfg: &Config) -> anyhow::Result<()> {
         &tracks,
         &dir.join("trajectory.svg"),
         &dir.join("trajectory.png"),
-    )
+    )?;
+    if cfg.robots.aerial.is_some() {
+        let side = swarmrt_analysis::run_dir::read_side_tracks(dir)?;
+        write_side_view_plots(
+            cfg,
+            &side,
+            &dir.join("trajectory_side.svg"),
+            &dir.join("trajectory_side.png"),
+        )?;
+    }
+    Ok(())
 }
 
 /// After the world process died, cuts `trajectory.csv` back to its last complete tick (all

@@ -12,4 +12,5 @@ crate::registry::behaviours! {
     Formation => formation::Formation,
     Flocking => flocking::Flocking,
     Grouping => grouping::Grouping,
+    Planner => planner::Planner,
 }

@@ -415,6 +415,7 @@ fn draw_figure<DB: DrawingBackend>(
     lay: &Layout,
     cfg: &Config,
     tracks: &[RobotTrack],
+    axes: (&str, &str),
 ) -> anyhow::Result<()> {
     root.fill(&WHITE)
         .map_err(draw_err("trajectory plot: background"))?;
@@ -435,8 +436,8 @@ fn draw_figure<DB: DrawingBackend>(
         .map_err(draw_err("trajectory plot: axes"))?;
     chart
         .configure_mesh()
-        .x_desc("x (m)")
-        .y_desc("y (m)")
+        .x_desc(axes.0)
+        .y_desc(axes.1)
         .x_labels((lay.plot_w / 90).max(3) as usize)
         .y_labels((lay.plot_h / 70).max(3) as usize)
         .x_label_formatter(&fmt)
@@ -558,14 +559,87 @@ pub fn write_trajectory_plots(
         lay: layout(cfg, tracks),
         cfg,
         tracks,
+        axes: ("x (m)", "y (m)"),
     };
     write_svg_png(&fig, svg_path, png_path)
+}
+
+/// The side view of an aerial run: the same figure in the (y, z) plane, looking west along
+/// x. `tracks` hold `(y, z)` points; obstacles are drawn as their y extent up to their
+/// height (the ceiling for those without one), each goal at its height.
+pub fn write_side_view_plots(
+    cfg: &Config,
+    tracks: &[RobotTrack],
+    svg_path: &Path,
+    png_path: &Path,
+) -> anyhow::Result<()> {
+    super::ensure_font()?;
+    let side = side_view(cfg);
+    let fig = TrajectoryFigure {
+        lay: layout(&side, tracks),
+        cfg: &side,
+        tracks,
+        axes: ("y (m)", "z (m)"),
+    };
+    write_svg_png(&fig, svg_path, png_path)
+}
+
+/// `cfg` projected on the (y, z) plane for [`write_side_view_plots`].
+fn side_view(cfg: &Config) -> Config {
+    use swarmrt_scenario::RectObstacle;
+    let mut side = cfg.clone();
+    let top = cfg.map.height.unwrap_or(1.0);
+    let [_, y0, _, y1] = cfg.map.bounds;
+    let m = &mut side.map;
+    m.bounds = [y0, 0.0, y1, top];
+    let column = |y_min: f64, y_max: f64, h: Option<f64>| RectObstacle {
+        x_min: y_min,
+        y_min: 0.0,
+        x_max: y_max,
+        y_max: h.unwrap_or(top).min(top),
+        height: None,
+    };
+    let mut rects: Vec<RectObstacle> = Vec::new();
+    rects.extend(
+        cfg.map
+            .circles
+            .iter()
+            .map(|c| column(c.y - c.r, c.y + c.r, c.height)),
+    );
+    rects.extend(
+        cfg.map
+            .rectangles
+            .iter()
+            .map(|r| column(r.y_min, r.y_max, r.height)),
+    );
+    rects.extend(cfg.map.polygons.iter().map(|p| {
+        let ys = p.points.iter().map(|q| q[1]);
+        let lo = ys.clone().fold(f64::INFINITY, f64::min);
+        let hi = ys.fold(f64::NEG_INFINITY, f64::max);
+        column(lo, hi, p.height)
+    }));
+    m.rectangles = rects;
+    m.circles.clear();
+    m.polygons.clear();
+    m.goal.x = cfg.map.goal.y;
+    m.goal.y = cfg.map.goal.z.unwrap_or(0.0);
+    for (g, group) in side.robots.start.groups.iter_mut().enumerate() {
+        // Each group's goal at its height (goal_of gives aerial robots one).
+        if let Some(id) = (0..cfg.robots.count).find(|&i| cfg.start_group(i) == g) {
+            let goal = cfg.goal_of(id);
+            group.goal = Some([goal.y, goal.z.unwrap_or(0.0)]);
+        }
+    }
+    side.robots.aerial = None;
+    side.scenario.name = format!("{} (side view)", cfg.scenario.name);
+    side
 }
 
 struct TrajectoryFigure<'a> {
     lay: Layout,
     cfg: &'a Config,
     tracks: &'a [RobotTrack],
+    axes: (&'static str, &'static str),
 }
 
 impl Drawing for TrajectoryFigure<'_> {
@@ -574,7 +648,7 @@ impl Drawing for TrajectoryFigure<'_> {
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
-        draw_figure(root, &self.lay, self.cfg, self.tracks)
+        draw_figure(root, &self.lay, self.cfg, self.tracks, self.axes)
     }
 }
 

@@ -4,6 +4,7 @@ pub mod bench;
 pub mod check;
 pub mod clean;
 pub mod fuzz;
+pub mod plan;
 pub mod run;
 pub mod sweep;
 pub mod tune;

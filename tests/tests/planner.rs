@@ -1,0 +1,275 @@
+//! Seed 002 end to end: three UAV processes fly the routes the Raft leader planned and
+//! committed, to their goals without a conflict or a collision, over a clean and a lossy,
+//! late radio; killing the leader mid-flight still brings the others home; both modes write
+//! the same bytes; `swarm plan` prints the routes.
+
+use std::path::Path;
+use std::time::Duration;
+
+use swarmrt_tests::{assert_modes_agree_with_loss, assert_ok, bytes, run_config, swarm};
+
+const CONFIG: &str = "configs/planner_uav3.toml";
+const LEADER_DIES: &str = "configs/planner_uav3_leader_dies.toml";
+
+/// Rows of `trajectory.csv` as (tick, id, [x, y, z], state).
+fn rows(dir: &Path) -> Vec<(u64, u32, [f64; 3], String)> {
+    let text = String::from_utf8(bytes(dir, "trajectory.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("no `{name}` column in {header:?}"))
+    };
+    let (t, id, x, y, z, st) = (
+        col("tick"),
+        col("id"),
+        col("x"),
+        col("y"),
+        col("z"),
+        col("state"),
+    );
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (
+                f[t].parse().unwrap(),
+                f[id].parse().unwrap(),
+                [
+                    f[x].parse().unwrap(),
+                    f[y].parse().unwrap(),
+                    f[z].parse().unwrap(),
+                ],
+                f[st].to_string(),
+            )
+        })
+        .collect()
+}
+
+/// The goals of planner_uav3, by robot id.
+const GOALS: [[f64; 3]; 3] = [[8.5, 13.5, 1.5], [5.5, 13.5, 3.5], [2.5, 13.5, 1.5]];
+
+/// Checks from the trajectory alone (independently of the metrics): at every tick every two
+/// UAVs are more than two radii plus a margin apart, no UAV ever shares a grid cell (d = 1 m)
+/// with another within delta = 1 s (10 ticks), and each UAV in `home` ends within its goal
+/// radius (0.3 m).
+fn assert_safe_and_home(dir: &Path, home: &[u32]) {
+    let rows = rows(dir);
+    let last = rows.iter().map(|r| r.0).max().unwrap();
+    let cell = |p: [f64; 3]| {
+        (
+            p[0].floor() as i64,
+            p[1].floor() as i64,
+            p[2].floor() as i64,
+        )
+    };
+    let mut held: Vec<((i64, i64, i64), u64, u32)> = Vec::new();
+    for tick in 0..=last {
+        let now: Vec<&(u64, u32, [f64; 3], String)> = rows.iter().filter(|r| r.0 == tick).collect();
+        for (a, ra) in now.iter().enumerate() {
+            for rb in &now[a + 1..] {
+                let d = (0..3)
+                    .map(|k| (ra.2[k] - rb.2[k]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                assert!(
+                    d > 0.6,
+                    "{}: UAVs {} and {} {d:.3} m apart at tick {tick}",
+                    dir.display(),
+                    ra.1,
+                    rb.1
+                );
+            }
+            let c = cell(ra.2);
+            for &(c2, t2, v2) in &held {
+                assert!(
+                    !(c2 == c && v2 != ra.1 && tick <= t2 + 10),
+                    "{}: UAV {} entered cell {c:?} at tick {tick}, {} ticks after UAV {v2} held it",
+                    dir.display(),
+                    ra.1,
+                    tick - t2
+                );
+            }
+        }
+        for r in &now {
+            if r.3 == "active" || r.3 == "dead" {
+                held.push((cell(r.2), tick, r.1));
+            }
+        }
+        held.retain(|&(_, t, _)| tick <= t + 10);
+    }
+    for &id in home {
+        let end = rows.iter().rfind(|r| r.1 == id).unwrap();
+        let g = GOALS[id as usize];
+        let off = (0..3)
+            .map(|k| (end.2[k] - g[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(
+            off < 0.3,
+            "{}: UAV {id} ended {off:.3} m from its goal",
+            dir.display()
+        );
+        assert_eq!(end.3, "active", "UAV {id}");
+    }
+}
+
+#[test]
+fn three_uav_processes_reach_their_goals_with_no_conflict_and_no_collision() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (name, extra) in [
+        ("clean", &[][..]),
+        (
+            "lossy",
+            &["--set", "radio.loss=0.2", "--set", "radio.delay_ticks=2"][..],
+        ),
+    ] {
+        let dir = tmp.path().join(name);
+        let m = run_config(CONFIG, &dir, extra);
+        assert_eq!(m["mode"], "processes");
+        let p = &m["planner"];
+        assert_eq!(p["reached"], 3, "{name}: {p}");
+        assert_eq!(p["conflicts"], 0, "{name}: {p}");
+        assert_eq!(p["collisions"], 0, "{name}: {p}");
+        assert_eq!(m["collisions"], 0, "{name}: {m}");
+        assert!(p["plans"].as_u64().unwrap() >= 1, "{name}: {p}");
+        // Every route the leader planned has a cost and expansions of its own.
+        let routes = p["routes"].as_array().unwrap();
+        assert!(routes.len() >= 3, "{name}: {p}");
+        assert!(
+            routes.iter().all(|r| r["cost"].as_f64().unwrap() > 0.0),
+            "{p}"
+        );
+        assert!(p["min_separation"].as_f64().unwrap() > 0.6, "{name}: {p}");
+        assert_safe_and_home(&dir, &[0, 1, 2]);
+        // Aerial records carry the height, and the figures a side view.
+        let header = String::from_utf8(bytes(&dir, "trajectory.csv")).unwrap();
+        assert!(header.starts_with("tick,id,x,y,z,theta,v,vz,omega,lidar,state\n"));
+        assert!(dir.join("trajectory_side.png").exists());
+    }
+}
+
+#[test]
+fn killing_the_leader_mid_flight_still_brings_the_others_home_without_a_collision() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("leader_dies");
+    let m = run_config(LEADER_DIES, &dir, &[]);
+    let p = &m["planner"];
+    // Exactly one robot died: the leader at tick 120, while all three were flying.
+    let events = String::from_utf8(bytes(&dir, "events.jsonl")).unwrap();
+    let died: Vec<&str> = events
+        .lines()
+        .filter(|l| l.contains("\"event\":\"died\""))
+        .collect();
+    assert_eq!(died.len(), 1, "{died:?}");
+    assert!(died[0].contains("\"tick\":120"), "{}", died[0]);
+    let dead: u32 = serde_json::from_str::<serde_json::Value>(died[0]).unwrap()["robot"]
+        .as_u64()
+        .unwrap() as u32;
+    let flying_before = events
+        .lines()
+        .filter(|l| l.contains("\"flying\""))
+        .filter(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["tick"]
+                .as_u64()
+                .unwrap()
+                < 120
+        })
+        .count();
+    assert_eq!(
+        flying_before, 3,
+        "all three flew a committed route before the kill"
+    );
+    // The new leader re-planned the two remaining routes and both arrived.
+    assert!(p["replans"].as_u64().unwrap() >= 1, "{p}");
+    assert_eq!(p["reached"], 2, "{p}");
+    assert_eq!(p["collisions"], 0, "{p}");
+    assert_eq!(p["conflicts"], 0, "{p}");
+    let home: Vec<u32> = (0..3).filter(|&v| v != dead).collect();
+    assert_safe_and_home(&dir, &home);
+}
+
+#[test]
+fn both_modes_write_the_same_records_with_a_lossy_late_radio() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = assert_modes_agree_with_loss(
+        tmp.path(),
+        LEADER_DIES,
+        600,
+        &[],
+        &["trajectory.csv", "events.jsonl"],
+    );
+    assert_eq!(m["planner"]["collisions"], 0, "{m}");
+}
+
+#[test]
+fn swarm_plan_prints_each_route_from_start_to_goal_without_conflicts() {
+    let out = swarm(&["plan", CONFIG, "--json"], Duration::from_secs(60));
+    assert_ok(&out);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["conflicts"], 0, "{v}");
+    assert_eq!(v["slot_s"], 2.0);
+    let routes = v["routes"].as_array().unwrap();
+    assert_eq!(routes.len(), 3);
+    for r in routes {
+        let cells = r["cells"].as_array().unwrap();
+        assert_eq!(cells[0]["cell"], r["start"], "{r}");
+        assert_eq!(cells.last().unwrap()["cell"], r["goal"], "{r}");
+        assert!(r["expansions"].as_u64().unwrap() > 0);
+        for w in cells.windows(2) {
+            // One slot per step, each step to a 26-neighbour or a wait.
+            let dt = w[1]["t"].as_f64().unwrap() - w[0]["t"].as_f64().unwrap();
+            assert_eq!(dt, 2.0, "{r}");
+            let (a, b) = (
+                w[0]["cell"].as_array().unwrap(),
+                w[1]["cell"].as_array().unwrap(),
+            );
+            for (a, b) in a.iter().zip(b) {
+                assert!(
+                    (a.as_i64().unwrap() - b.as_i64().unwrap()).abs() <= 1,
+                    "{r}"
+                );
+            }
+        }
+    }
+    // The table form names every vehicle and the planning time.
+    let out = swarm(&["plan", CONFIG], Duration::from_secs(60));
+    assert_ok(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    for v in 0..3 {
+        assert!(text.contains(&format!("vehicle {v}: ")), "{text}");
+    }
+    assert!(text.contains("conflicts: 0; planning time:"), "{text}");
+}
+
+#[test]
+fn planner_configs_that_cannot_fly_are_refused_with_the_key() {
+    for (args, key) in [
+        (vec!["plan", "configs/goto_simple.toml"], "behaviour.kind"),
+        (
+            vec!["check", CONFIG, "--set", "behaviour.cruise_speed=0.9"],
+            "behaviour.cruise_speed",
+        ),
+        (vec!["check", CONFIG, "--set", "map.height=0"], "map.height"),
+        (
+            vec!["check", CONFIG, "--set", "robots.aerial.start_z=7.5"],
+            "robots.aerial.start_z",
+        ),
+        (
+            vec![
+                "check",
+                CONFIG,
+                "--set",
+                "map.circles=[{x=2.5,y=9.5,r=0.8,height=-1}]",
+            ],
+            "map.circles[0].height",
+        ),
+    ] {
+        let out = swarm(&args, Duration::from_secs(60));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(&format!("`{key}`")), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    }
+}
