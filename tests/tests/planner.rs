@@ -273,3 +273,27 @@ fn planner_configs_that_cannot_fly_are_refused_with_the_key() {
         assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
     }
 }
+
+#[test]
+fn a_restarted_leader_process_rejoins_mid_air_and_every_uav_arrives() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("restart");
+    let m = run_config(
+        CONFIG,
+        &dir,
+        &[
+            "--set",
+            "faults.restart=[{tick=120,robot=\"leader\",down_ticks=20}]",
+            "--set",
+            "radio.loss=0.2",
+            "--set",
+            "radio.delay_ticks=2",
+        ],
+    );
+    assert_eq!(m["restarts"], 1, "{m}");
+    let p = &m["planner"];
+    assert_eq!(p["reached"], 3, "{p}");
+    assert_eq!(p["collisions"], 0, "{p}");
+    assert!(p["plans"].as_u64().unwrap() >= 2, "{p}");
+    assert_safe_and_home(&dir, &[0, 1, 2]);
+}

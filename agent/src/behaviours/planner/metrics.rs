@@ -13,8 +13,19 @@ use swarmrt_planner::{Reservations, plan_all};
 
 use super::{PlannerParams, scene};
 
-/// The names [`metrics`] returns.
-pub const NAMES: &[&str] = &["planner"];
+/// The scalar metrics [`metrics`] computes, as sweeps and tunes name them.
+pub const NAMES: &[&str] = &[
+    "planner.plans",
+    "planner.replans",
+    "planner.route_cost",
+    "planner.expansions",
+    "planner.no_route",
+    "planner.hovers",
+    "planner.conflicts",
+    "planner.min_separation",
+    "planner.reached",
+    "planner.collisions",
+];
 
 fn u64_of(v: &Value) -> u64 {
     v.as_u64().unwrap_or(0)

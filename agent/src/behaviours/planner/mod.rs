@@ -438,6 +438,14 @@ impl Behaviour for Planner {
     fn step(&mut self, obs: &Observation, inbox: &[Heard<Beacon>], act: &mut Act<Beacon, PlanNote>) {
         let tick = obs.tick;
         self.pos = [obs.x, obs.y, obs.z];
+        if self.last_tick.is_none() {
+            // A first observation: hover where the vehicle is (a restarted process finds its
+            // UAV mid-air, not at its start).
+            self.mode = Mode::Hover {
+                at: self.pos,
+                since: tick,
+            };
+        }
         // A gap in ticks: this process was frozen and its route ran on without it.
         if self.last_tick.is_some_and(|t| tick > t + 1) {
             self.hover(tick, Some(HoverWhy::Late), act);
