@@ -88,7 +88,7 @@ fn defaults_are_filled_in_declaration_order_and_round_trip() {
 fn every_behaviour_is_listed_with_its_keys() {
     assert_eq!(
         registry::kinds(),
-        ["goto", "formation", "flocking", "grouping"]
+        ["goto", "formation", "flocking", "grouping", "planner"]
     );
     let keys = registry::param_keys();
     for k in [
@@ -97,6 +97,7 @@ fn every_behaviour_is_listed_with_its_keys() {
         "behaviour.verdict_ticks",
         "behaviour.migration_deg",
         "behaviour.cluster_distance",
+        "behaviour.lead_time",
     ] {
         assert!(keys.iter().any(|x| x == k), "{k} in {keys:?}");
     }

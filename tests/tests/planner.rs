@@ -297,3 +297,37 @@ fn a_restarted_leader_process_rejoins_mid_air_and_every_uav_arrives() {
     assert!(p["plans"].as_u64().unwrap() >= 2, "{p}");
     assert_safe_and_home(&dir, &[0, 1, 2]);
 }
+
+#[test]
+fn routes_longer_than_one_frame_commit_in_parts_and_are_flown_whole() {
+    // 0.3 m cells: 45-56 moves a route, two log entries each.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("parts");
+    let m = run_config(
+        CONFIG,
+        &dir,
+        &[
+            "--in-process",
+            "--set",
+            "behaviour.cell=0.3",
+            "--set",
+            "radio.loss=0.2",
+            "--set",
+            "radio.delay_ticks=2",
+        ],
+    );
+    let p = &m["planner"];
+    let moves: Vec<u64> = p["routes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["moves"].as_u64().unwrap())
+        .collect();
+    assert!(moves.iter().all(|&n| n > 32), "{moves:?}");
+    let events = String::from_utf8(bytes(&dir, "events.jsonl")).unwrap();
+    let parts = events.lines().filter(|l| l.contains("\"route\":{")).count();
+    assert!(parts >= 2 * 3, "{parts} proposals of route parts");
+    assert_eq!(p["reached"], 3, "{p}");
+    assert_eq!(p["collisions"], 0, "{p}");
+    assert_eq!(p["conflicts"], 0, "{p}");
+}

@@ -180,27 +180,33 @@ mod tests {
         .unwrap()
     }
 
-    #[test]
-    fn an_aerial_robot_clears_a_low_obstacle_from_above() {
-        let mut cfg = MapConfig {
+    /// A 10 x 10 map with no obstacles.
+    fn empty_map() -> MapConfig {
+        MapConfig {
             bounds: [0.0, 0.0, 10.0, 10.0],
             goal: Goal {
-                x: 9.0,
-                y: 9.0,
+                x: 1.0,
+                y: 1.0,
                 radius: 0.5,
                 z: None,
             },
             circles: vec![],
-            rectangles: vec![RectObstacle {
-                x_min: 4.0,
-                y_min: 4.0,
-                x_max: 6.0,
-                y_max: 6.0,
-                height: Some(2.0),
-            }],
+            rectangles: vec![],
             polygons: vec![],
-            height: Some(5.0),
-        };
+            height: None,
+        }
+    }
+
+    #[test]
+    fn an_aerial_robot_clears_a_low_obstacle_from_above() {
+        let mut cfg = empty_map();
+        cfg.rectangles.push(RectObstacle {
+            x_min: 4.0,
+            y_min: 4.0,
+            x_max: 6.0,
+            y_max: 6.0,
+            height: Some(2.0),
+        });
         let m = Map::build(&cfg).unwrap();
         assert_eq!(m.clearance_3d((5.0, 5.0), 1.0), 0.0);
         assert!((m.clearance_3d((5.0, 5.0), 2.5) - 0.5).abs() < 1e-9);
@@ -244,22 +250,11 @@ mod tests {
 
     #[test]
     fn degenerate_polygon_is_refused_with_its_key() {
-        let mut cfg = MapConfig {
-            bounds: [0.0, 0.0, 10.0, 10.0],
-            goal: Goal {
-                x: 1.0,
-                y: 1.0,
-                radius: 0.5,
-                z: None,
-            },
-            circles: vec![],
-            rectangles: vec![],
-            polygons: vec![PolygonObstacle {
-                points: vec![[1.0, 1.0], [2.0, 2.0], [3.0, 3.0]],
-                height: None,
-            }],
+        let mut cfg = empty_map();
+        cfg.polygons.push(PolygonObstacle {
+            points: vec![[1.0, 1.0], [2.0, 2.0], [3.0, 3.0]],
             height: None,
-        };
+        });
         let e = Map::build(&cfg).err().unwrap();
         assert_eq!(e.key, "map.polygons[0].points");
         assert_eq!(

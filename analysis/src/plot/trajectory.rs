@@ -554,12 +554,22 @@ pub fn write_trajectory_plots(
     svg_path: &Path,
     png_path: &Path,
 ) -> anyhow::Result<()> {
+    write_figure(cfg, tracks, ("x (m)", "y (m)"), svg_path, png_path)
+}
+
+fn write_figure(
+    cfg: &Config,
+    tracks: &[RobotTrack],
+    axes: (&'static str, &'static str),
+    svg_path: &Path,
+    png_path: &Path,
+) -> anyhow::Result<()> {
     super::ensure_font()?;
     let fig = TrajectoryFigure {
         lay: layout(cfg, tracks),
         cfg,
         tracks,
-        axes: ("x (m)", "y (m)"),
+        axes,
     };
     write_svg_png(&fig, svg_path, png_path)
 }
@@ -573,15 +583,13 @@ pub fn write_side_view_plots(
     svg_path: &Path,
     png_path: &Path,
 ) -> anyhow::Result<()> {
-    super::ensure_font()?;
-    let side = side_view(cfg);
-    let fig = TrajectoryFigure {
-        lay: layout(&side, tracks),
-        cfg: &side,
+    write_figure(
+        &side_view(cfg),
         tracks,
-        axes: ("y (m)", "z (m)"),
-    };
-    write_svg_png(&fig, svg_path, png_path)
+        ("y (m)", "z (m)"),
+        svg_path,
+        png_path,
+    )
 }
 
 /// `cfg` projected on the (y, z) plane for [`write_side_view_plots`].
