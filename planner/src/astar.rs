@@ -110,31 +110,49 @@ impl Hasher for KeyHasher {
     }
 }
 
-/// State id → node, flat with generation stamps when `cells × slots` is small, hashed
+/// No node.
+const NONE: u32 = u32::MAX;
+
+/// What the search knows about one state `(cell, t)`: its node, if generated, and the
+/// potential of eq. (2) at that cell and slot, once computed (NaN before).
+#[derive(Debug, Clone, Copy)]
+struct Slot {
+    stamp: u32,
+    node: u32,
+    p: f64,
+}
+
+impl Slot {
+    const FRESH: Slot = Slot {
+        stamp: 0,
+        node: NONE,
+        p: f64::NAN,
+    };
+}
+
+/// State id → [`Slot`], flat with generation stamps when `cells × slots` is small, hashed
 /// otherwise.
 #[derive(Debug, Default)]
 struct StateMap {
-    stamp: Vec<u32>,
-    node: Vec<u32>,
+    flat_slots: Vec<Slot>,
     generation: u32,
     flat: bool,
-    hashed: HashMap<u64, u32, BuildHasherDefault<KeyHasher>>,
+    hashed: HashMap<u64, Slot, BuildHasherDefault<KeyHasher>>,
 }
 
-/// Most flat entries (2 × u32 each) a planner keeps: 32 MiB.
+/// Most flat entries (16 bytes each) a planner keeps: 64 MiB.
 const FLAT_MAX: usize = 1 << 22;
 
 impl StateMap {
     fn reset(&mut self, states: usize) {
         self.flat = states <= FLAT_MAX;
         if self.flat {
-            if self.stamp.len() < states {
-                self.stamp.resize(states, 0);
-                self.node.resize(states, 0);
+            if self.flat_slots.len() < states {
+                self.flat_slots.resize(states, Slot::FRESH);
             }
             self.generation = self.generation.wrapping_add(1);
             if self.generation == 0 {
-                self.stamp.fill(0);
+                self.flat_slots.fill(Slot::FRESH);
                 self.generation = 1;
             }
         } else {
@@ -142,22 +160,20 @@ impl StateMap {
         }
     }
 
+    /// The entry of state `key`, fresh (no node, no potential) if not seen in this search.
     #[inline]
-    fn get(&self, key: usize) -> Option<u32> {
+    fn slot(&mut self, key: usize) -> &mut Slot {
         if self.flat {
-            (self.stamp[key] == self.generation).then(|| self.node[key])
+            let s = &mut self.flat_slots[key];
+            if s.stamp != self.generation {
+                *s = Slot {
+                    stamp: self.generation,
+                    ..Slot::FRESH
+                };
+            }
+            s
         } else {
-            self.hashed.get(&(key as u64)).copied()
-        }
-    }
-
-    #[inline]
-    fn insert(&mut self, key: usize, node: u32) {
-        if self.flat {
-            self.stamp[key] = self.generation;
-            self.node[key] = node;
-        } else {
-            self.hashed.insert(key as u64, node);
+            self.hashed.entry(key as u64).or_insert(Slot::FRESH)
         }
     }
 }
@@ -168,15 +184,18 @@ struct Node {
     t: u32,
     g: f64,
     parent: u32,
+    /// `seq` of this node's latest (cheapest) open entry; older entries are stale.
+    seq: u32,
     closed: bool,
 }
 
+/// An open-list entry. `f` and `h` are non-negative finite, so their bit patterns order like
+/// the values.
 #[derive(Debug, Clone, Copy)]
 struct Open {
-    f: f64,
-    h: f64,
-    seq: u64,
-    g: f64,
+    f: u64,
+    h: u64,
+    seq: u32,
     node: u32,
 }
 
@@ -193,12 +212,9 @@ impl PartialOrd for Open {
 }
 impl Ord for Open {
     /// Reversed: `BinaryHeap` pops the smallest `(f, h, seq)`.
+    #[inline]
     fn cmp(&self, other: &Self) -> Ordering {
-        other
-            .f
-            .total_cmp(&self.f)
-            .then(other.h.total_cmp(&self.h))
-            .then(other.seq.cmp(&self.seq))
+        (other.f, other.h, other.seq).cmp(&(self.f, self.h, self.seq))
     }
 }
 
@@ -209,6 +225,18 @@ struct Move {
     len: f64,
     /// Cells of the swept box other than the origin; the target is the last one.
     sweep: Vec<isize>,
+}
+
+/// Per cell, filled lazily once per search: the heuristic, and which moves leave the cell.
+#[derive(Debug, Clone, Copy, Default)]
+struct CellInfo {
+    h_gen: u32,
+    mask_gen: u32,
+    h: f64,
+    /// Moves (bit = index in `Planner::moves`) that stay in the grid and sweep no blocked cell.
+    ok: u32,
+    /// Of those, the moves that sweep a cell with any reservation (occupancy to check).
+    reserved: u32,
 }
 
 /// Reusable search buffers: keep one per thread and call [`Planner::plan`] repeatedly to
@@ -225,6 +253,8 @@ pub struct Planner {
     generation: u32,
     /// Per cell: (generation, slot, g) of the first state of that cell expanded.
     first: Vec<(u32, u32, f64)>,
+    /// Per cell: heuristic and move masks.
+    cells: Vec<CellInfo>,
     /// Other vehicles near the cell being expanded.
     near: Vec<[f64; 3]>,
 }
@@ -326,11 +356,12 @@ impl Planner {
         let horizon = params.horizon_slots;
         let ncells = grid.len();
         let [nx, ny, nz] = grid.dims().map(i32::from);
+        let goal = job.goal;
         let h_of = |c: Cell| {
             d * octile(
-                u32::from(c.i.abs_diff(job.goal.i)),
-                u32::from(c.j.abs_diff(job.goal.j)),
-                u32::from(c.k.abs_diff(job.goal.k)),
+                u32::from(c.i.abs_diff(goal.i)),
+                u32::from(c.j.abs_diff(goal.j)),
+                u32::from(c.k.abs_diff(goal.k)),
             )
         };
 
@@ -338,6 +369,14 @@ impl Planner {
         self.open.clear();
         self.states.reset(ncells * (horizon as usize + 1));
         self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            // Stamps of 0 could alias the initial state of the per-cell tables.
+            self.first.fill((0, 0, 0.0));
+            self.cells.fill(CellInfo::default());
+            self.positions_gen.fill(u32::MAX);
+            self.generation = 1;
+        }
+        let generation = self.generation;
         if self.positions.len() < horizon as usize + 2 {
             self.positions.resize(horizon as usize + 2, Vec::new());
             self.positions_gen.resize(horizon as usize + 2, u32::MAX);
@@ -345,41 +384,59 @@ impl Planner {
         if self.first.len() < ncells {
             self.first.resize(ncells, (0, 0, 0.0));
         }
+        if self.cells.len() < ncells {
+            self.cells.resize(ncells, CellInfo::default());
+        }
         let off = potential.is_off();
         let steady = reservations.steady_from(job.vehicle);
         let near_r2 = (potential.range() + 3f64.sqrt() * d + 1e-9).powi(2);
         let start_idx = grid.index(job.start);
         let h0 = h_of(job.start);
-        self.nodes.push(Node {
+        self.cells[start_idx].h = h0;
+        self.cells[start_idx].h_gen = generation;
+        let Planner {
+            nodes,
+            open,
+            states,
+            moves,
+            positions,
+            positions_gen,
+            first,
+            cells,
+            near,
+            ..
+        } = self;
+        let moves: &[Move] = moves;
+        nodes.push(Node {
             cell: start_idx as u32,
             t: 0,
             g: 0.0,
-            parent: u32::MAX,
+            parent: NONE,
+            seq: 0,
             closed: false,
         });
-        self.states.insert(start_idx, 0);
-        self.open.push(Open {
-            f: weight * h0,
-            h: h0,
+        states.slot(start_idx).node = 0;
+        open.push(Open {
+            f: (weight * h0).to_bits(),
+            h: h0.to_bits(),
             seq: 0,
-            g: 0.0,
             node: 0,
         });
-        let mut seq: u64 = 1;
+        let mut seq: u32 = 1;
         let mut expansions: u64 = 0;
         let base = i64::from(job.start_slot);
 
-        while let Some(top) = self.open.pop() {
+        while let Some(top) = open.pop() {
             let ni = top.node as usize;
-            let node = self.nodes[ni];
-            if node.closed || top.g > node.g {
+            let node = nodes[ni];
+            if node.closed || top.seq != node.seq {
                 continue;
             }
             let slot = base + i64::from(node.t);
             if node.cell as usize == goal_idx && slot >= goal_free {
-                return Ok(self.reconstruct(grid, ni, job.start_slot, expansions));
+                return Ok(reconstruct(grid, nodes, ni, job.start_slot, expansions));
             }
-            self.nodes[ni].closed = true;
+            nodes[ni].closed = true;
             let idx = node.cell as usize;
             let cell = grid.cell_at(idx);
             let centre = grid.centre(cell);
@@ -388,9 +445,9 @@ impl Planner {
             // wait chain reaches this very state for less; expanding it cannot help.
             // In the steady part of time (nothing changes any more), an earlier-or-equal slot
             // with no larger g dominates outright: the same continuation is valid earlier.
-            let rec = self.first[idx];
-            if rec.0 != self.generation {
-                self.first[idx] = (self.generation, node.t, node.g);
+            let rec = first[idx];
+            if rec.0 != generation {
+                first[idx] = (generation, node.t, node.g);
             } else if rec.1 <= node.t && base + i64::from(rec.1) >= steady && rec.2 <= node.g {
                 continue;
             } else if rec.1 < node.t && node.t - rec.1 <= MAX_DOMINANCE_WAIT {
@@ -406,16 +463,20 @@ impl Planner {
                     let p = if off {
                         0.0
                     } else {
-                        fill_positions(
-                            &mut self.positions,
-                            &mut self.positions_gen,
-                            self.generation,
-                            reservations,
-                            job.vehicle,
-                            base,
-                            t,
-                        );
-                        potential.sum(centre, &self.positions[t as usize])
+                        let s = states.slot(t as usize * ncells + idx);
+                        if s.p.is_nan() {
+                            fill_positions(
+                                positions,
+                                positions_gen,
+                                generation,
+                                reservations,
+                                job.vehicle,
+                                base,
+                                t,
+                            );
+                            s.p = potential.sum(centre, &positions[t as usize]);
+                        }
+                        s.p
                     };
                     gw += params.wait_cost + p;
                     if gw + 1e-9 >= node.g {
@@ -437,78 +498,130 @@ impl Planner {
                 continue;
             }
             let t1 = node.t + 1;
-            self.near.clear();
+            // Other vehicles close enough to this cell to reach a neighbour: the potential of
+            // eq. (2) over them equals the one over all vehicles, bit for bit (same order,
+            // the others add nothing).
+            near.clear();
             if !off {
                 fill_positions(
-                    &mut self.positions,
-                    &mut self.positions_gen,
-                    self.generation,
+                    positions,
+                    positions_gen,
+                    generation,
                     reservations,
                     job.vehicle,
                     base,
                     t1,
                 );
-                for q in &self.positions[t1 as usize] {
+                for q in &positions[t1 as usize] {
                     let d2 = (q[0] - centre[0]).powi(2)
                         + (q[1] - centre[1]).powi(2)
                         + (q[2] - centre[2]).powi(2);
                     if d2 <= near_r2 {
-                        self.near.push(*q);
+                        near.push(*q);
                     }
                 }
             }
-            let others: &[[f64; 3]] = &self.near;
+            let others: &[[f64; 3]] = near;
+            let row = t1 as usize * ncells;
 
             // Wait.
             if !(reservations.any_at(idx) && reservations.occupied(idx, slot + 1, job.vehicle)) {
-                let cost = params.wait_cost + potential.sum(centre, others);
-                let h = h_of(cell);
-                Self::relax(
-                    &mut self.nodes,
-                    &mut self.states,
-                    &mut self.open,
-                    &mut seq,
-                    ni,
-                    idx,
-                    t1,
-                    node.g + cost,
-                    h,
-                    weight,
-                    ncells,
-                );
+                let s = states.slot(row + idx);
+                if s.node == NONE || !nodes[s.node as usize].closed {
+                    let p = if others.is_empty() {
+                        0.0
+                    } else {
+                        if s.p.is_nan() {
+                            s.p = potential.sum(centre, others);
+                        }
+                        s.p
+                    };
+                    let cost = params.wait_cost + p;
+                    let h = cells[idx].h;
+                    relax(
+                        nodes,
+                        s,
+                        open,
+                        &mut seq,
+                        ni,
+                        idx,
+                        t1,
+                        node.g + cost,
+                        h,
+                        weight,
+                    );
+                }
             }
             // The 26 moves.
-            'moves: for m in &self.moves {
-                let (i, j, k) = (
-                    i32::from(cell.i) + m.off[0],
-                    i32::from(cell.j) + m.off[1],
-                    i32::from(cell.k) + m.off[2],
-                );
-                if i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz {
-                    continue;
-                }
-                for &delta in &m.sweep {
-                    let b = (idx as isize + delta) as usize;
-                    if grid.blocked_index(b)
-                        || (reservations.any_at(b)
-                            && (reservations.occupied(b, slot, job.vehicle)
-                                || reservations.occupied(b, slot + 1, job.vehicle)))
-                    {
-                        continue 'moves;
+            let info = &mut cells[idx];
+            if info.mask_gen != generation {
+                let (mut ok, mut reserved) = (0u32, 0u32);
+                'masks: for (bit, m) in moves.iter().enumerate() {
+                    let (i, j, k) = (
+                        i32::from(cell.i) + m.off[0],
+                        i32::from(cell.j) + m.off[1],
+                        i32::from(cell.k) + m.off[2],
+                    );
+                    if i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz {
+                        continue;
+                    }
+                    let mut any = false;
+                    for &delta in &m.sweep {
+                        let b = (idx as isize + delta) as usize;
+                        if grid.blocked_index(b) {
+                            continue 'masks;
+                        }
+                        any |= reservations.any_at(b);
+                    }
+                    ok |= 1 << bit;
+                    if any {
+                        reserved |= 1 << bit;
                     }
                 }
-                let n = Cell {
-                    i: i as u16,
-                    j: j as u16,
-                    k: k as u16,
-                };
+                info.mask_gen = generation;
+                info.ok = ok;
+                info.reserved = reserved;
+            }
+            let (mut todo, reserved) = (info.ok, info.reserved);
+            'moves: while todo != 0 {
+                let bit = todo.trailing_zeros();
+                todo &= todo - 1;
+                let m = &moves[bit as usize];
+                if reserved & (1 << bit) != 0 {
+                    for &delta in &m.sweep {
+                        let b = (idx as isize + delta) as usize;
+                        if reservations.any_at(b)
+                            && (reservations.occupied(b, slot, job.vehicle)
+                                || reservations.occupied(b, slot + 1, job.vehicle))
+                        {
+                            continue 'moves;
+                        }
+                    }
+                }
                 let nidx = (idx as isize + m.sweep[m.sweep.len() - 1]) as usize;
-                let cost = m.len + potential.sum(grid.centre(n), others);
-                let h = h_of(n);
-                Self::relax(
-                    &mut self.nodes,
-                    &mut self.states,
-                    &mut self.open,
+                let s = states.slot(row + nidx);
+                if s.node != NONE && nodes[s.node as usize].closed {
+                    continue;
+                }
+                let p = if others.is_empty() {
+                    0.0
+                } else {
+                    if s.p.is_nan() {
+                        s.p = potential.sum(grid.centre(grid.cell_at(nidx)), others);
+                    }
+                    s.p
+                };
+                let cost = m.len + p;
+                let ci = &mut cells[nidx];
+                if ci.h_gen != generation {
+                    ci.h = h_of(grid.cell_at(nidx));
+                    ci.h_gen = generation;
+                }
+                let h = ci.h;
+                relax(
+                    nodes,
+                    s,
+                    open,
                     &mut seq,
                     ni,
                     nidx,
@@ -516,83 +629,80 @@ impl Planner {
                     node.g + cost,
                     h,
                     weight,
-                    ncells,
                 );
             }
         }
         Err(PlanError::NoRoute { expansions })
     }
+}
 
-    #[allow(clippy::too_many_arguments)]
-    #[inline]
-    fn relax(
-        nodes: &mut Vec<Node>,
-        states: &mut StateMap,
-        open: &mut BinaryHeap<Open>,
-        seq: &mut u64,
-        parent: usize,
-        cell: usize,
-        t: u32,
-        g: f64,
-        h: f64,
-        weight: f64,
-        ncells: usize,
-    ) {
-        let key = t as usize * ncells + cell;
-        let ni = match states.get(key) {
-            Some(ni) => {
-                let n = &mut nodes[ni as usize];
-                if n.closed || g >= n.g {
-                    return;
-                }
-                n.g = g;
-                n.parent = parent as u32;
-                ni
-            }
-            None => {
-                let ni = nodes.len() as u32;
-                nodes.push(Node {
-                    cell: cell as u32,
-                    t,
-                    g,
-                    parent: parent as u32,
-                    closed: false,
-                });
-                states.insert(key, ni);
-                ni
-            }
-        };
-        open.push(Open {
-            f: g + weight * h,
-            h,
-            seq: *seq,
+/// Offers `g` to the state `(cell, t)` whose entry is `slot`: a new node, or a cheaper path
+/// to an open one, is pushed on the open list.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn relax(
+    nodes: &mut Vec<Node>,
+    slot: &mut Slot,
+    open: &mut BinaryHeap<Open>,
+    seq: &mut u32,
+    parent: usize,
+    cell: usize,
+    t: u32,
+    g: f64,
+    h: f64,
+    weight: f64,
+) {
+    let ni = if slot.node != NONE {
+        let n = &mut nodes[slot.node as usize];
+        if n.closed || g >= n.g {
+            return;
+        }
+        n.g = g;
+        n.parent = parent as u32;
+        n.seq = *seq;
+        slot.node
+    } else {
+        let ni = nodes.len() as u32;
+        nodes.push(Node {
+            cell: cell as u32,
+            t,
             g,
-            node: ni,
+            parent: parent as u32,
+            seq: *seq,
+            closed: false,
         });
-        *seq += 1;
-    }
+        slot.node = ni;
+        ni
+    };
+    open.push(Open {
+        f: (g + weight * h).to_bits(),
+        h: h.to_bits(),
+        seq: *seq,
+        node: ni,
+    });
+    *seq += 1;
+}
 
-    fn reconstruct(
-        &self,
-        grid: &Grid,
-        goal_node: usize,
-        start_slot: u32,
-        expansions: u64,
-    ) -> Route {
-        let mut cells = Vec::with_capacity(self.nodes[goal_node].t as usize + 1);
-        let mut ni = goal_node as u32;
-        while ni != u32::MAX {
-            let n = &self.nodes[ni as usize];
-            cells.push(grid.cell_at(n.cell as usize));
-            ni = n.parent;
-        }
-        cells.reverse();
-        Route {
-            start_slot,
-            cells,
-            cost: self.nodes[goal_node].g,
-            expansions,
-        }
+fn reconstruct(
+    grid: &Grid,
+    nodes: &[Node],
+    goal_node: usize,
+    start_slot: u32,
+    expansions: u64,
+) -> Route {
+    let mut cells = Vec::with_capacity(nodes[goal_node].t as usize + 1);
+    let mut ni = goal_node as u32;
+    while ni != NONE {
+        let n = &nodes[ni as usize];
+        cells.push(grid.cell_at(n.cell as usize));
+        ni = n.parent;
+    }
+    cells.reverse();
+    Route {
+        start_slot,
+        cells,
+        cost: nodes[goal_node].g,
+        expansions,
     }
 }
 
