@@ -60,6 +60,14 @@ fn main() {
                 ..base.clone()
             },
         ),
+        (
+            "eps1cl1",
+            PlanParams {
+                epsilon: 1.0,
+                clearance: 1.0,
+                ..base.clone()
+            },
+        ),
     ];
     for (gname, grid) in [
         ("paper", scenes::paper_grid()),
@@ -87,7 +95,8 @@ fn main() {
     }
     let sg = scenes::swarm_grid();
     let sj: Vec<Job> = scenes::swarm_jobs();
-    for (pname, p) in &variants[3..] {
+    // The swarm rows of `compare` (a = b = 0; eps = 1; eps = 1 with clearance 1).
+    for (pname, p) in [&variants[4], &variants[3], &variants[6]] {
         if std::env::args().any(|a| a == "--quick") {
             break;
         }

@@ -7,11 +7,14 @@
 //! never free) + the potential of eq. (2) at the new cell at the new slot, summed over the
 //! other vehicles' planned positions at that slot ([`Reservations::positions_at`]).
 //!
-//! Heuristic: the paper's `H` is a distance to the goal; we use the 26-connected free-space
-//! ("octile") distance, `d·(√3·n₃ + √2·(n₂-n₃) + (n₁-n₂))` with `n₁ ≥ n₂ ≥ n₃` the sorted
-//! index gaps. It is ≥ the Euclidean distance (so better informed) yet still admissible and
-//! consistent: every path of 26-moves between two cells has length ≥ it, each edge costs at
-//! least its length, and potential and waits only add non-negative terms.
+//! Heuristic: the paper's `H` is a distance to the goal; we use the static 26-connected
+//! distance around obstacles (`heuristic.rs`): the length of the shortest path of
+//! 26-moves (same no-corner-cutting rule) ignoring time, other vehicles and the potential.
+//! In free space it is the "octile" distance `d·(√3·n₃ + √2·(n₂-n₃) + (n₁-n₂))` (`n₁ ≥ n₂ ≥
+//! n₃` the sorted index gaps), bit for bit; behind walls it is larger. It is admissible and
+//! consistent: it is a true shortest length of a graph that only has more moves than this
+//! search, each edge costs at least its length, and potential and waits only add
+//! non-negative terms. Cells from which the goal cannot be reached at all are never pushed.
 //!
 //! Bounded relaxation (paper, 2.2): `f = g + (1+ε)·H`. Weighted A* with a consistent `H`
 //! returns cost ≤ (1+ε)·optimal even when closed states are never reopened (Likhachev et al.,
@@ -45,6 +48,12 @@
 //! check it. `Route::expansions` counts expanded states, not dropped ones.
 //!
 //! Ties: among equal `f`, smaller `h` first, then first pushed first — fully deterministic.
+//!
+//! Speed (same results, see the tests): per search, lazily, each cell gets its heuristic and
+//! two move masks (moves allowed by the grid; of those, moves sweeping a cell with any
+//! reservation, the only ones whose occupancy is checked); each `(cell, slot)` keeps its
+//! node and its eq. (2) potential, computed once; a closed neighbour is skipped before its
+//! cost is computed; a stale open entry is recognised by its push number.
 
 use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap};
@@ -52,6 +61,7 @@ use std::hash::{BuildHasherDefault, Hasher};
 
 use crate::error::PlanError;
 use crate::grid::{Cell, Grid};
+use crate::heuristic::{self, BackMove, StaticDistance};
 use crate::occupancy::Reservations;
 use crate::params::PlanParams;
 use crate::potential::Potential;
@@ -68,24 +78,6 @@ pub struct Job {
     pub goal: Cell,
     /// Slot at which the vehicle is at `start`.
     pub start_slot: u32,
-}
-
-/// 26-connected free-space distance between index gaps, in cells.
-#[inline]
-fn octile(dx: u32, dy: u32, dz: u32) -> f64 {
-    let (mut a, mut b, mut c) = (dx, dy, dz);
-    if a < b {
-        std::mem::swap(&mut a, &mut b);
-    }
-    if b < c {
-        std::mem::swap(&mut b, &mut c);
-    }
-    if a < b {
-        std::mem::swap(&mut a, &mut b);
-    }
-    const S2: f64 = std::f64::consts::SQRT_2;
-    const S3: f64 = 1.732_050_807_568_877_2;
-    S3 * f64::from(c) + S2 * f64::from(b - c) + f64::from(a - b)
 }
 
 /// Finalizer of splitmix64: a fast, well-mixed hash for `u64` state keys. Only used for
@@ -225,6 +217,8 @@ struct Move {
     len: f64,
     /// Cells of the swept box other than the origin; the target is the last one.
     sweep: Vec<isize>,
+    /// The same cells as a set of move codes ([`route::offset`]), bit per code.
+    bits: u32,
 }
 
 /// Per cell, filled lazily once per search: the heuristic, and which moves leave the cell.
@@ -239,6 +233,106 @@ struct CellInfo {
     reserved: u32,
 }
 
+/// Move codes with `di = -1` (codes 0..9); `<< 18` gives `di = +1`.
+const CODES_DI_NEG: u32 = 0x1ff;
+/// Move codes with `dj = -1`; `<< 6` gives `dj = +1`.
+const CODES_DJ_NEG: u32 = 0b111 | 0b111 << 9 | 0b111 << 18;
+/// Move codes with `dk = -1`; `<< 2` gives `dk = +1`.
+const CODES_DK_NEG: u32 = 0o1_111_111_111;
+
+/// Fills `info`'s move masks for the cell `idx` if not done in this search.
+#[inline]
+fn fill_masks(
+    info: &mut CellInfo,
+    idx: usize,
+    grid: &Grid,
+    reservations: &Reservations,
+    moves: &[Move],
+    deltas: &[isize; 27],
+    generation: u32,
+) {
+    if info.mask_gen == generation {
+        return;
+    }
+    // The 3 × 3 × 3 neighbourhood as bit sets over move codes: outside the grid or blocked,
+    // and reserved by anyone.
+    let cell = grid.cell_at(idx);
+    let [nx, ny, nz] = grid.dims();
+    let mut out = 0u32;
+    if cell.i == 0 {
+        out |= CODES_DI_NEG;
+    }
+    if cell.i + 1 == nx {
+        out |= CODES_DI_NEG << 18;
+    }
+    if cell.j == 0 {
+        out |= CODES_DJ_NEG;
+    }
+    if cell.j + 1 == ny {
+        out |= CODES_DJ_NEG << 6;
+    }
+    if cell.k == 0 {
+        out |= CODES_DK_NEG;
+    }
+    if cell.k + 1 == nz {
+        out |= CODES_DK_NEG << 2;
+    }
+    let mut blocked = out;
+    let mut taken = 0u32;
+    let mut inside = !out & ((1 << 27) - 1) & !(1 << route::WAIT);
+    while inside != 0 {
+        let code = inside.trailing_zeros();
+        inside &= inside - 1;
+        let b = (idx as isize + deltas[code as usize]) as usize;
+        blocked |= u32::from(grid.blocked_index(b)) << code;
+        taken |= u32::from(reservations.any_at(b)) << code;
+    }
+    let (mut ok, mut reserved) = (0u32, 0u32);
+    for (bit, m) in moves.iter().enumerate() {
+        if m.bits & blocked == 0 {
+            ok |= 1 << bit;
+            if m.bits & taken != 0 {
+                reserved |= 1 << bit;
+            }
+        }
+    }
+    info.mask_gen = generation;
+    info.ok = ok;
+    info.reserved = reserved;
+}
+
+/// The heuristic at cell `idx` in metres (infinite when the goal cannot be reached from it),
+/// computed once per search.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn h_at(
+    idx: usize,
+    dist: &mut StaticDistance,
+    grid: &Grid,
+    reservations: &Reservations,
+    moves: &[Move],
+    deltas: &[isize; 27],
+    back: &[BackMove],
+    cells: &mut [CellInfo],
+    generation: u32,
+) -> f64 {
+    if cells[idx].h_gen == generation {
+        return cells[idx].h;
+    }
+    let dims = grid.dims().map(u32::from);
+    let h = match dist.counts(idx, dims, back, |n| {
+        let info = &mut cells[n];
+        fill_masks(info, n, grid, reservations, moves, deltas, generation);
+        info.ok
+    }) {
+        Some(n) => grid.d() * heuristic::length(n),
+        None => f64::INFINITY,
+    };
+    cells[idx].h = h;
+    cells[idx].h_gen = generation;
+    h
+}
+
 /// Reusable search buffers: keep one per thread and call [`Planner::plan`] repeatedly to
 /// avoid re-allocating (results do not depend on what was planned before).
 #[derive(Debug, Default)]
@@ -247,6 +341,9 @@ pub struct Planner {
     open: BinaryHeap<Open>,
     states: StateMap,
     moves: Vec<Move>,
+    back_moves: Vec<BackMove>,
+    /// Flat-index delta of each move code's step.
+    deltas: [isize; 27],
     moves_for: Option<([u16; 3], u64)>,
     positions: Vec<Vec<[f64; 3]>>,
     positions_gen: Vec<u32>,
@@ -257,6 +354,8 @@ pub struct Planner {
     cells: Vec<CellInfo>,
     /// Other vehicles near the cell being expanded.
     near: Vec<[f64; 3]>,
+    /// The heuristic's backward search.
+    dist: StaticDistance,
 }
 
 /// Longest wait chain tried when testing dominance (see [`Planner::plan`]).
@@ -312,7 +411,12 @@ impl Planner {
             }
             sweep.push(off);
             let nz = off.iter().filter(|x| **x != 0).count();
+            let bits = sweep
+                .iter()
+                .map(|o| 1u32 << route::code_of(o[0], o[1], o[2]))
+                .fold(0, |a, b| a | b);
             self.moves.push(Move {
+                bits,
                 off,
                 len: (nz as f64).sqrt() * grid.d(),
                 sweep: sweep
@@ -321,6 +425,20 @@ impl Planner {
                     .collect(),
             });
         }
+        for code in 0u8..27 {
+            let o = route::offset(code);
+            self.deltas[usize::from(code)] =
+                o[0] as isize + nx * (o[1] as isize + ny * o[2] as isize);
+        }
+        self.back_moves = self
+            .moves
+            .iter()
+            .map(|m| BackMove {
+                off: m.off,
+                delta: m.sweep[m.sweep.len() - 1],
+                kind: m.off.iter().filter(|x| **x != 0).count() - 1,
+            })
+            .collect();
         self.moves_for = Some(key);
     }
 
@@ -355,16 +473,6 @@ impl Planner {
         let d = grid.d();
         let horizon = params.horizon_slots;
         let ncells = grid.len();
-        let [nx, ny, nz] = grid.dims().map(i32::from);
-        let goal = job.goal;
-        let h_of = |c: Cell| {
-            d * octile(
-                u32::from(c.i.abs_diff(goal.i)),
-                u32::from(c.j.abs_diff(goal.j)),
-                u32::from(c.k.abs_diff(goal.k)),
-            )
-        };
-
         self.nodes.clear();
         self.open.clear();
         self.states.reset(ncells * (horizon as usize + 1));
@@ -391,9 +499,11 @@ impl Planner {
         let steady = reservations.steady_from(job.vehicle);
         let near_r2 = (potential.range() + 3f64.sqrt() * d + 1e-9).powi(2);
         let start_idx = grid.index(job.start);
-        let h0 = h_of(job.start);
-        self.cells[start_idx].h = h0;
-        self.cells[start_idx].h_gen = generation;
+        self.dist.reset(
+            ncells,
+            goal_idx,
+            [job.start.i, job.start.j, job.start.k].map(u32::from),
+        );
         let Planner {
             nodes,
             open,
@@ -404,9 +514,40 @@ impl Planner {
             first,
             cells,
             near,
+            dist,
+            back_moves,
+            deltas,
             ..
         } = self;
+        let deltas: &[isize; 27] = deltas;
         let moves: &[Move] = moves;
+        let back: &[BackMove] = back_moves;
+        // The start may be inside an inflated obstacle (a vehicle may hover there and leave):
+        // the backward search only reaches unblocked cells, so it gets the octile distance
+        // (admissible; the start is expanded first whatever its f).
+        let h0 = if grid.blocked_index(start_idx) {
+            d * heuristic::length(heuristic::octile_counts(
+                u32::from(job.start.i.abs_diff(job.goal.i)),
+                u32::from(job.start.j.abs_diff(job.goal.j)),
+                u32::from(job.start.k.abs_diff(job.goal.k)),
+            ))
+        } else {
+            h_at(
+                start_idx,
+                dist,
+                grid,
+                reservations,
+                moves,
+                deltas,
+                back,
+                cells,
+                generation,
+            )
+        };
+        if h0 == f64::INFINITY {
+            // No static path at all: nothing to search.
+            return Err(PlanError::NoRoute { expansions: 0 });
+        }
         nodes.push(Node {
             cell: start_idx as u32,
             t: 0,
@@ -554,34 +695,7 @@ impl Planner {
             }
             // The 26 moves.
             let info = &mut cells[idx];
-            if info.mask_gen != generation {
-                let (mut ok, mut reserved) = (0u32, 0u32);
-                'masks: for (bit, m) in moves.iter().enumerate() {
-                    let (i, j, k) = (
-                        i32::from(cell.i) + m.off[0],
-                        i32::from(cell.j) + m.off[1],
-                        i32::from(cell.k) + m.off[2],
-                    );
-                    if i < 0 || j < 0 || k < 0 || i >= nx || j >= ny || k >= nz {
-                        continue;
-                    }
-                    let mut any = false;
-                    for &delta in &m.sweep {
-                        let b = (idx as isize + delta) as usize;
-                        if grid.blocked_index(b) {
-                            continue 'masks;
-                        }
-                        any |= reservations.any_at(b);
-                    }
-                    ok |= 1 << bit;
-                    if any {
-                        reserved |= 1 << bit;
-                    }
-                }
-                info.mask_gen = generation;
-                info.ok = ok;
-                info.reserved = reserved;
-            }
+            fill_masks(info, idx, grid, reservations, moves, deltas, generation);
             let (mut todo, reserved) = (info.ok, info.reserved);
             'moves: while todo != 0 {
                 let bit = todo.trailing_zeros();
@@ -612,12 +726,20 @@ impl Planner {
                     s.p
                 };
                 let cost = m.len + p;
-                let ci = &mut cells[nidx];
-                if ci.h_gen != generation {
-                    ci.h = h_of(grid.cell_at(nidx));
-                    ci.h_gen = generation;
+                let h = h_at(
+                    nidx,
+                    dist,
+                    grid,
+                    reservations,
+                    moves,
+                    deltas,
+                    back,
+                    cells,
+                    generation,
+                );
+                if h == f64::INFINITY {
+                    continue;
                 }
-                let h = ci.h;
                 relax(
                     nodes,
                     s,

@@ -50,6 +50,7 @@
 pub mod astar;
 pub mod error;
 pub mod grid;
+mod heuristic;
 pub mod occupancy;
 pub mod params;
 pub mod potential;
