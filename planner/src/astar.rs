@@ -7,14 +7,11 @@
 //! never free) + the potential of eq. (2) at the new cell at the new slot, summed over the
 //! other vehicles' planned positions at that slot ([`Reservations::positions_at`]).
 //!
-//! Heuristic: the paper's `H` is a distance to the goal; we use the static 26-connected
-//! distance around obstacles (`heuristic.rs`): the length of the shortest path of
-//! 26-moves (same no-corner-cutting rule) ignoring time, other vehicles and the potential.
-//! In free space it is the "octile" distance `d·(√3·n₃ + √2·(n₂-n₃) + (n₁-n₂))` (`n₁ ≥ n₂ ≥
-//! n₃` the sorted index gaps), bit for bit; behind walls it is larger. It is admissible and
-//! consistent: it is a true shortest length of a graph that only has more moves than this
-//! search, each edge costs at least its length, and potential and waits only add
-//! non-negative terms. Cells from which the goal cannot be reached at all are never pushed.
+//! Heuristic: the paper's `H` is a distance to the goal; we use the 26-connected free-space
+//! ("octile") distance, `d·(√3·n₃ + √2·(n₂-n₃) + (n₁-n₂))` with `n₁ ≥ n₂ ≥ n₃` the sorted
+//! index gaps. It is ≥ the Euclidean distance (so better informed) yet still admissible and
+//! consistent: every path of 26-moves between two cells has length ≥ it, each edge costs at
+//! least its length, and potential and waits only add non-negative terms.
 //!
 //! Bounded relaxation (paper, 2.2): `f = g + (1+ε)·H`. Weighted A* with a consistent `H`
 //! returns cost ≤ (1+ε)·optimal even when closed states are never reopened (Likhachev et al.,
@@ -53,15 +50,13 @@
 //! two move masks (moves allowed by the grid; of those, moves sweeping a cell with any
 //! reservation, the only ones whose occupancy is checked); each `(cell, slot)` keeps its
 //! node and its eq. (2) potential, computed once; a closed neighbour is skipped before its
-//! cost is computed; a stale open entry is recognised by its push number.
+//! cost is computed; a cheaper path to an open state updates its open-list entry in place.
 
-use std::cmp::Ordering;
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 use crate::error::PlanError;
 use crate::grid::{Cell, Grid};
-use crate::heuristic::{self, BackMove, StaticDistance};
 use crate::occupancy::Reservations;
 use crate::params::PlanParams;
 use crate::potential::Potential;
@@ -78,6 +73,24 @@ pub struct Job {
     pub goal: Cell,
     /// Slot at which the vehicle is at `start`.
     pub start_slot: u32,
+}
+
+/// 26-connected free-space distance between index gaps, in cells.
+#[inline]
+fn octile(dx: u32, dy: u32, dz: u32) -> f64 {
+    let (mut a, mut b, mut c) = (dx, dy, dz);
+    if a < b {
+        std::mem::swap(&mut a, &mut b);
+    }
+    if b < c {
+        std::mem::swap(&mut b, &mut c);
+    }
+    if a < b {
+        std::mem::swap(&mut a, &mut b);
+    }
+    const S2: f64 = std::f64::consts::SQRT_2;
+    const S3: f64 = 1.732_050_807_568_877_2;
+    S3 * f64::from(c) + S2 * f64::from(b - c) + f64::from(a - b)
 }
 
 /// Finalizer of splitmix64: a fast, well-mixed hash for `u64` state keys. Only used for
@@ -176,13 +189,14 @@ struct Node {
     t: u32,
     g: f64,
     parent: u32,
-    /// `seq` of this node's latest (cheapest) open entry; older entries are stale.
-    seq: u32,
+    /// Position in the open list, `NONE` when not in it.
+    pos: u32,
     closed: bool,
 }
 
-/// An open-list entry. `f` and `h` are non-negative finite, so their bit patterns order like
-/// the values.
+/// An open-list entry: a node and its key `(f, h, seq)`, smallest first. `f` and `h` are
+/// non-negative finite, so their bit patterns order like the values; `seq` numbers the
+/// (re)insertions, so keys are unique and ties go to the first pushed.
 #[derive(Debug, Clone, Copy)]
 struct Open {
     f: u64,
@@ -191,29 +205,103 @@ struct Open {
     node: u32,
 }
 
-impl PartialEq for Open {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
-}
-impl Eq for Open {}
-impl PartialOrd for Open {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Open {
-    /// Reversed: `BinaryHeap` pops the smallest `(f, h, seq)`.
+impl Open {
     #[inline]
-    fn cmp(&self, other: &Self) -> Ordering {
-        (other.f, other.h, other.seq).cmp(&(self.f, self.h, self.seq))
+    fn before(&self, other: &Open) -> bool {
+        (self.f, self.h, self.seq) < (other.f, other.h, other.seq)
+    }
+}
+
+/// Binary min-heap of open nodes with their positions kept in [`Node::pos`], so a cheaper
+/// path to an open node updates its entry in place (no stale entries). Pops in the same
+/// order as a heap holding every push and skipping superseded ones: the entries in the heap
+/// are exactly the latest push of each open node, with the same keys.
+#[derive(Debug, Default)]
+struct OpenList {
+    heap: Vec<Open>,
+}
+
+impl OpenList {
+    fn clear(&mut self) {
+        self.heap.clear();
+    }
+
+    /// Inserts `e`, or replaces the entry of its node (the key may go up or down).
+    #[inline]
+    fn set(&mut self, nodes: &mut [Node], e: Open) {
+        let pos = nodes[e.node as usize].pos;
+        if pos == NONE {
+            self.heap.push(e);
+            self.sift_up(nodes, self.heap.len() - 1);
+        } else {
+            self.heap[pos as usize] = e;
+            if !self.sift_up(nodes, pos as usize) {
+                self.sift_down(nodes, pos as usize);
+            }
+        }
+    }
+
+    #[inline]
+    fn pop(&mut self, nodes: &mut [Node]) -> Option<Open> {
+        if self.heap.is_empty() {
+            return None;
+        }
+        let top = self.heap.swap_remove(0);
+        nodes[top.node as usize].pos = NONE;
+        if !self.heap.is_empty() {
+            self.sift_down(nodes, 0);
+        }
+        Some(top)
+    }
+
+    /// Moves the entry at `i` up to its place; whether it moved.
+    #[inline]
+    fn sift_up(&mut self, nodes: &mut [Node], mut i: usize) -> bool {
+        let e = self.heap[i];
+        let start = i;
+        while i > 0 {
+            let p = (i - 1) / 2;
+            let q = self.heap[p];
+            if !e.before(&q) {
+                break;
+            }
+            self.heap[i] = q;
+            nodes[q.node as usize].pos = i as u32;
+            i = p;
+        }
+        self.heap[i] = e;
+        nodes[e.node as usize].pos = i as u32;
+        i != start
+    }
+
+    #[inline]
+    fn sift_down(&mut self, nodes: &mut [Node], mut i: usize) {
+        let e = self.heap[i];
+        let n = self.heap.len();
+        loop {
+            let mut c = 2 * i + 1;
+            if c >= n {
+                break;
+            }
+            if c + 1 < n && self.heap[c + 1].before(&self.heap[c]) {
+                c += 1;
+            }
+            let q = self.heap[c];
+            if !q.before(&e) {
+                break;
+            }
+            self.heap[i] = q;
+            nodes[q.node as usize].pos = i as u32;
+            i = c;
+        }
+        self.heap[i] = e;
+        nodes[e.node as usize].pos = i as u32;
     }
 }
 
 /// One of the 26 moves with what it sweeps, as flat-index deltas for the current grid.
 #[derive(Debug, Clone)]
 struct Move {
-    off: [i32; 3],
     len: f64,
     /// Cells of the swept box other than the origin; the target is the last one.
     sweep: Vec<isize>,
@@ -301,47 +389,14 @@ fn fill_masks(
     info.reserved = reserved;
 }
 
-/// The heuristic at cell `idx` in metres (infinite when the goal cannot be reached from it),
-/// computed once per search.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn h_at(
-    idx: usize,
-    dist: &mut StaticDistance,
-    grid: &Grid,
-    reservations: &Reservations,
-    moves: &[Move],
-    deltas: &[isize; 27],
-    back: &[BackMove],
-    cells: &mut [CellInfo],
-    generation: u32,
-) -> f64 {
-    if cells[idx].h_gen == generation {
-        return cells[idx].h;
-    }
-    let dims = grid.dims().map(u32::from);
-    let h = match dist.counts(idx, dims, back, |n| {
-        let info = &mut cells[n];
-        fill_masks(info, n, grid, reservations, moves, deltas, generation);
-        info.ok
-    }) {
-        Some(n) => grid.d() * heuristic::length(n),
-        None => f64::INFINITY,
-    };
-    cells[idx].h = h;
-    cells[idx].h_gen = generation;
-    h
-}
-
 /// Reusable search buffers: keep one per thread and call [`Planner::plan`] repeatedly to
 /// avoid re-allocating (results do not depend on what was planned before).
 #[derive(Debug, Default)]
 pub struct Planner {
     nodes: Vec<Node>,
-    open: BinaryHeap<Open>,
+    open: OpenList,
     states: StateMap,
     moves: Vec<Move>,
-    back_moves: Vec<BackMove>,
     /// Flat-index delta of each move code's step.
     deltas: [isize; 27],
     moves_for: Option<([u16; 3], u64)>,
@@ -354,8 +409,6 @@ pub struct Planner {
     cells: Vec<CellInfo>,
     /// Other vehicles near the cell being expanded.
     near: Vec<[f64; 3]>,
-    /// The heuristic's backward search.
-    dist: StaticDistance,
 }
 
 /// Longest wait chain tried when testing dominance (see [`Planner::plan`]).
@@ -417,7 +470,6 @@ impl Planner {
                 .fold(0, |a, b| a | b);
             self.moves.push(Move {
                 bits,
-                off,
                 len: (nz as f64).sqrt() * grid.d(),
                 sweep: sweep
                     .iter()
@@ -430,15 +482,6 @@ impl Planner {
             self.deltas[usize::from(code)] =
                 o[0] as isize + nx * (o[1] as isize + ny * o[2] as isize);
         }
-        self.back_moves = self
-            .moves
-            .iter()
-            .map(|m| BackMove {
-                off: m.off,
-                delta: m.sweep[m.sweep.len() - 1],
-                kind: m.off.iter().filter(|x| **x != 0).count() - 1,
-            })
-            .collect();
         self.moves_for = Some(key);
     }
 
@@ -499,11 +542,17 @@ impl Planner {
         let steady = reservations.steady_from(job.vehicle);
         let near_r2 = (potential.range() + 3f64.sqrt() * d + 1e-9).powi(2);
         let start_idx = grid.index(job.start);
-        self.dist.reset(
-            ncells,
-            goal_idx,
-            [job.start.i, job.start.j, job.start.k].map(u32::from),
-        );
+        let goal = job.goal;
+        let h_of = |c: Cell| {
+            d * octile(
+                u32::from(c.i.abs_diff(goal.i)),
+                u32::from(c.j.abs_diff(goal.j)),
+                u32::from(c.k.abs_diff(goal.k)),
+            )
+        };
+        let h0 = h_of(job.start);
+        self.cells[start_idx].h = h0;
+        self.cells[start_idx].h_gen = generation;
         let Planner {
             nodes,
             open,
@@ -514,65 +563,36 @@ impl Planner {
             first,
             cells,
             near,
-            dist,
-            back_moves,
             deltas,
             ..
         } = self;
         let deltas: &[isize; 27] = deltas;
         let moves: &[Move] = moves;
-        let back: &[BackMove] = back_moves;
-        // The start may be inside an inflated obstacle (a vehicle may hover there and leave):
-        // the backward search only reaches unblocked cells, so it gets the octile distance
-        // (admissible; the start is expanded first whatever its f).
-        let h0 = if grid.blocked_index(start_idx) {
-            d * heuristic::length(heuristic::octile_counts(
-                u32::from(job.start.i.abs_diff(job.goal.i)),
-                u32::from(job.start.j.abs_diff(job.goal.j)),
-                u32::from(job.start.k.abs_diff(job.goal.k)),
-            ))
-        } else {
-            h_at(
-                start_idx,
-                dist,
-                grid,
-                reservations,
-                moves,
-                deltas,
-                back,
-                cells,
-                generation,
-            )
-        };
-        if h0 == f64::INFINITY {
-            // No static path at all: nothing to search.
-            return Err(PlanError::NoRoute { expansions: 0 });
-        }
         nodes.push(Node {
             cell: start_idx as u32,
             t: 0,
             g: 0.0,
             parent: NONE,
-            seq: 0,
+            pos: NONE,
             closed: false,
         });
         states.slot(start_idx).node = 0;
-        open.push(Open {
-            f: (weight * h0).to_bits(),
-            h: h0.to_bits(),
-            seq: 0,
-            node: 0,
-        });
+        open.set(
+            nodes,
+            Open {
+                f: (weight * h0).to_bits(),
+                h: h0.to_bits(),
+                seq: 0,
+                node: 0,
+            },
+        );
         let mut seq: u32 = 1;
         let mut expansions: u64 = 0;
         let base = i64::from(job.start_slot);
 
-        while let Some(top) = open.pop() {
+        while let Some(top) = open.pop(nodes) {
             let ni = top.node as usize;
             let node = nodes[ni];
-            if node.closed || top.seq != node.seq {
-                continue;
-            }
             let slot = base + i64::from(node.t);
             if node.cell as usize == goal_idx && slot >= goal_free {
                 return Ok(reconstruct(grid, nodes, ni, job.start_slot, expansions));
@@ -726,20 +746,12 @@ impl Planner {
                     s.p
                 };
                 let cost = m.len + p;
-                let h = h_at(
-                    nidx,
-                    dist,
-                    grid,
-                    reservations,
-                    moves,
-                    deltas,
-                    back,
-                    cells,
-                    generation,
-                );
-                if h == f64::INFINITY {
-                    continue;
+                let ci = &mut cells[nidx];
+                if ci.h_gen != generation {
+                    ci.h = h_of(grid.cell_at(nidx));
+                    ci.h_gen = generation;
                 }
+                let h = ci.h;
                 relax(
                     nodes,
                     s,
@@ -759,13 +771,13 @@ impl Planner {
 }
 
 /// Offers `g` to the state `(cell, t)` whose entry is `slot`: a new node, or a cheaper path
-/// to an open one, is pushed on the open list.
+/// to an open one, is put on the open list.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn relax(
     nodes: &mut Vec<Node>,
     slot: &mut Slot,
-    open: &mut BinaryHeap<Open>,
+    open: &mut OpenList,
     seq: &mut u32,
     parent: usize,
     cell: usize,
@@ -781,7 +793,6 @@ fn relax(
         }
         n.g = g;
         n.parent = parent as u32;
-        n.seq = *seq;
         slot.node
     } else {
         let ni = nodes.len() as u32;
@@ -790,18 +801,21 @@ fn relax(
             t,
             g,
             parent: parent as u32,
-            seq: *seq,
+            pos: NONE,
             closed: false,
         });
         slot.node = ni;
         ni
     };
-    open.push(Open {
-        f: (g + weight * h).to_bits(),
-        h: h.to_bits(),
-        seq: *seq,
-        node: ni,
-    });
+    open.set(
+        nodes,
+        Open {
+            f: (g + weight * h).to_bits(),
+            h: h.to_bits(),
+            seq: *seq,
+            node: ni,
+        },
+    );
     *seq += 1;
 }
 

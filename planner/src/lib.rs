@@ -50,7 +50,6 @@
 pub mod astar;
 pub mod error;
 pub mod grid;
-mod heuristic;
 pub mod occupancy;
 pub mod params;
 pub mod potential;
