@@ -117,12 +117,15 @@ impl Hasher for KeyHasher {
 
 /// No node.
 const NONE: u32 = u32::MAX;
+/// Flag on [`Slot::node`]: the node is closed (expanded or dropped by dominance).
+const CLOSED: u32 = 1 << 31;
 
 /// What the search knows about one state `(cell, t)`: its node, if generated, and the
 /// potential of eq. (2) at that cell and slot, once computed (NaN before).
 #[derive(Debug, Clone, Copy)]
 struct Slot {
     stamp: u32,
+    /// Node index, with [`CLOSED`] once closed; `NONE` if none yet.
     node: u32,
     p: f64,
 }
@@ -191,7 +194,6 @@ struct Node {
     parent: u32,
     /// Position in the open list, `NONE` when not in it.
     pos: u32,
-    closed: bool,
 }
 
 /// An open-list entry: a node and its key `(f, h, seq)`, smallest first. `f` and `h` are
@@ -305,6 +307,8 @@ struct Move {
     len: f64,
     /// Cells of the swept box other than the origin; the target is the last one.
     sweep: Vec<isize>,
+    /// Flat-index delta of the target (the last of `sweep`).
+    target: isize,
     /// The same cells as a set of move codes ([`route::offset`]), bit per code.
     bits: u32,
 }
@@ -470,6 +474,7 @@ impl Planner {
                 .fold(0, |a, b| a | b);
             self.moves.push(Move {
                 bits,
+                target: off[0] as isize + nx * (off[1] as isize + ny * off[2] as isize),
                 len: (nz as f64).sqrt() * grid.d(),
                 sweep: sweep
                     .iter()
@@ -574,7 +579,6 @@ impl Planner {
             g: 0.0,
             parent: NONE,
             pos: NONE,
-            closed: false,
         });
         states.slot(start_idx).node = 0;
         open.set(
@@ -597,7 +601,9 @@ impl Planner {
             if node.cell as usize == goal_idx && slot >= goal_free {
                 return Ok(reconstruct(grid, nodes, ni, job.start_slot, expansions));
             }
-            nodes[ni].closed = true;
+            states
+                .slot(node.t as usize * ncells + node.cell as usize)
+                .node |= CLOSED;
             let idx = node.cell as usize;
             let cell = grid.cell_at(idx);
             let centre = grid.centre(cell);
@@ -688,7 +694,7 @@ impl Planner {
             // Wait.
             if !(reservations.any_at(idx) && reservations.occupied(idx, slot + 1, job.vehicle)) {
                 let s = states.slot(row + idx);
-                if s.node == NONE || !nodes[s.node as usize].closed {
+                if s.node == NONE || s.node & CLOSED == 0 {
                     let p = if others.is_empty() {
                         0.0
                     } else {
@@ -732,9 +738,9 @@ impl Planner {
                         }
                     }
                 }
-                let nidx = (idx as isize + m.sweep[m.sweep.len() - 1]) as usize;
+                let nidx = (idx as isize + m.target) as usize;
                 let s = states.slot(row + nidx);
-                if s.node != NONE && nodes[s.node as usize].closed {
+                if s.node != NONE && s.node & CLOSED != 0 {
                     continue;
                 }
                 let p = if others.is_empty() {
@@ -787,8 +793,9 @@ fn relax(
     weight: f64,
 ) {
     let ni = if slot.node != NONE {
+        // Closed slots never get here.
         let n = &mut nodes[slot.node as usize];
-        if n.closed || g >= n.g {
+        if g >= n.g {
             return;
         }
         n.g = g;
@@ -796,13 +803,13 @@ fn relax(
         slot.node
     } else {
         let ni = nodes.len() as u32;
+        assert!(ni < CLOSED, "more than 2^31 search nodes");
         nodes.push(Node {
             cell: cell as u32,
             t,
             g,
             parent: parent as u32,
             pos: NONE,
-            closed: false,
         });
         slot.node = ni;
         ni
