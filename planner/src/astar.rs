@@ -138,51 +138,109 @@ impl Slot {
     };
 }
 
-/// State id → [`Slot`], flat with generation stamps when `cells × slots` is small, hashed
-/// otherwise.
+/// How [`StateMap`] stores its slots.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+enum Layout {
+    /// One slot per state, stamped with the search generation.
+    #[default]
+    Flat,
+    /// Pages of [`PAGE`] consecutive states, allocated on first touch from a pool, found
+    /// through a stamped directory.
+    Paged,
+    /// A hash map (astronomically many states).
+    Hashed,
+}
+
+/// State id → [`Slot`]: flat with generation stamps when `cells × slots` is small, paged when
+/// larger, hashed beyond that.
 #[derive(Debug, Default)]
 struct StateMap {
-    flat_slots: Vec<Slot>,
+    /// Flat: every state's slot. Paged: the page pool.
+    slots: Vec<Slot>,
+    /// Paged: per page of states, (generation, page index in the pool).
+    dir: Vec<(u32, u32)>,
+    /// Paged: pages handed out in this search.
+    pages: usize,
     generation: u32,
-    flat: bool,
+    layout: Layout,
     hashed: HashMap<u64, Slot, BuildHasherDefault<KeyHasher>>,
 }
 
-/// Most flat entries (16 bytes each) a planner keeps: 64 MiB.
-const FLAT_MAX: usize = 1 << 22;
+/// Most flat entries (16 bytes each) a planner keeps: 32 MiB.
+const FLAT_MAX: usize = 1 << 21;
+/// States per page, as a shift.
+const PAGE_BITS: u32 = 6;
+/// States per page.
+const PAGE: usize = 1 << PAGE_BITS;
+/// Most directory entries (8 bytes each) a planner keeps: 128 MiB.
+const DIR_MAX: usize = 1 << 24;
 
 impl StateMap {
     fn reset(&mut self, states: usize) {
-        self.flat = states <= FLAT_MAX;
-        if self.flat {
-            if self.flat_slots.len() < states {
-                self.flat_slots.resize(states, Slot::FRESH);
-            }
-            self.generation = self.generation.wrapping_add(1);
-            if self.generation == 0 {
-                self.flat_slots.fill(Slot::FRESH);
-                self.generation = 1;
-            }
+        let dir_len = states.div_ceil(PAGE);
+        self.layout = if states <= FLAT_MAX {
+            Layout::Flat
+        } else if dir_len <= DIR_MAX {
+            Layout::Paged
         } else {
-            self.hashed.clear();
+            Layout::Hashed
+        };
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.slots.fill(Slot::FRESH);
+            self.dir.fill((0, 0));
+            self.generation = 1;
+        }
+        match self.layout {
+            Layout::Flat => {
+                if self.slots.len() < states {
+                    self.slots.resize(states, Slot::FRESH);
+                }
+            }
+            Layout::Paged => {
+                if self.dir.len() < dir_len {
+                    self.dir.resize(dir_len, (0, 0));
+                }
+                self.pages = 0;
+            }
+            Layout::Hashed => self.hashed.clear(),
         }
     }
 
     /// The entry of state `key`, fresh (no node, no potential) if not seen in this search.
     #[inline]
     fn slot(&mut self, key: usize) -> &mut Slot {
-        if self.flat {
-            let s = &mut self.flat_slots[key];
-            if s.stamp != self.generation {
-                *s = Slot {
+        let at = match self.layout {
+            Layout::Flat => key,
+            Layout::Paged => {
+                let d = &mut self.dir[key >> PAGE_BITS];
+                if d.0 != self.generation {
+                    let start = self.pages * PAGE;
+                    if self.slots.len() < start + PAGE {
+                        self.slots.resize(start + PAGE, Slot::FRESH);
+                    } else {
+                        self.slots[start..start + PAGE].fill(Slot::FRESH);
+                    }
+                    *d = (self.generation, self.pages as u32);
+                    self.pages += 1;
+                }
+                ((d.1 as usize) << PAGE_BITS) | (key & (PAGE - 1))
+            }
+            Layout::Hashed => {
+                return self.hashed.entry(key as u64).or_insert(Slot {
                     stamp: self.generation,
                     ..Slot::FRESH
-                };
+                });
             }
-            s
-        } else {
-            self.hashed.entry(key as u64).or_insert(Slot::FRESH)
+        };
+        let s = &mut self.slots[at];
+        if s.stamp != self.generation {
+            *s = Slot {
+                stamp: self.generation,
+                ..Slot::FRESH
+            };
         }
+        s
     }
 }
 
