@@ -916,3 +916,53 @@ pub fn plan(
 ) -> Result<Route, PlanError> {
     Planner::new().plan(grid, reservations, job, params)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every layout of the state table behaves like a map from key to slot that forgets
+    /// everything on reset.
+    #[test]
+    fn state_map_layouts_agree_with_a_map() {
+        for states in [1000, FLAT_MAX + 1, (DIR_MAX + 1) * PAGE] {
+            let mut map = StateMap::default();
+            let mut x: u64 = 0x2545_f491_4f6c_dd1d;
+            for round in 0..3u32 {
+                map.reset(states);
+                let mut reference: HashMap<usize, u32> = HashMap::new();
+                for i in 0..5000u32 {
+                    x ^= x << 13;
+                    x ^= x >> 7;
+                    x ^= x << 17;
+                    // Keys cluster like a search's: a few hot pages, some far away.
+                    let key = if x % 4 == 0 {
+                        (x >> 8) as usize % states
+                    } else {
+                        (x >> 8) as usize % 300 + states / 2
+                    };
+                    let s = map.slot(key);
+                    match reference.get(&key) {
+                        Some(&node) => assert_eq!(s.node, node, "round {round} key {key}"),
+                        None => {
+                            assert_eq!(s.node, NONE, "round {round} key {key}");
+                            assert!(s.p.is_nan());
+                        }
+                    }
+                    s.node = i;
+                    reference.insert(key, i);
+                }
+                assert_eq!(
+                    map.layout,
+                    if states <= FLAT_MAX {
+                        Layout::Flat
+                    } else if states <= DIR_MAX * PAGE {
+                        Layout::Paged
+                    } else {
+                        Layout::Hashed
+                    }
+                );
+            }
+        }
+    }
+}
