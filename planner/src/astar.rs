@@ -208,8 +208,25 @@ impl StateMap {
     }
 
     /// The entry of state `key`, fresh (no node, no potential) if not seen in this search.
-    #[inline]
+    #[inline(always)]
     fn slot(&mut self, key: usize) -> &mut Slot {
+        if self.layout == Layout::Flat {
+            let generation = self.generation;
+            let s = &mut self.slots[key];
+            if s.stamp != generation {
+                *s = Slot {
+                    stamp: generation,
+                    ..Slot::FRESH
+                };
+            }
+            return s;
+        }
+        self.slot_paged_or_hashed(key)
+    }
+
+    /// [`StateMap::slot`] for the paged and hashed layouts.
+    #[inline(never)]
+    fn slot_paged_or_hashed(&mut self, key: usize) -> &mut Slot {
         let at = match self.layout {
             Layout::Flat => key,
             Layout::Paged => {
