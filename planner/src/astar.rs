@@ -953,7 +953,7 @@ mod tests {
                     x ^= x >> 7;
                     x ^= x << 17;
                     // Keys cluster like a search's: a few hot pages, some far away.
-                    let key = if x % 4 == 0 {
+                    let key = if x.is_multiple_of(4) {
                         (x >> 8) as usize % states
                     } else {
                         (x >> 8) as usize % 300 + states / 2
