@@ -138,19 +138,9 @@ impl Reservations {
     /// Fixes `route` for `vehicle`: each run of equal cells `[s0, s1]` is occupied over
     /// `[s0 - pad, s1 + pad]`, the last cell from `s0 - pad` for ever (parked).
     pub fn add_route(&mut self, vehicle: u32, route: &Route) {
-        let mut k = 0;
-        let n = route.cells.len();
-        while k < n {
-            let c = route.cells[k];
-            let mut m = k;
-            while m + 1 < n && route.cells[m + 1] == c {
-                m += 1;
-            }
-            let s0 = i64::from(route.start_slot) + k as i64;
-            let s1 = i64::from(route.start_slot) + m as i64;
-            let to = if m + 1 == n { FOREVER } else { s1 + self.pad };
+        for (c, s0, s1, parked) in route.runs() {
+            let to = if parked { FOREVER } else { s1 + self.pad };
             self.reserve(vehicle, c, s0 - self.pad, to);
-            k = m + 1;
         }
         let known = self.known(vehicle);
         known.steady_from = known.steady_from.max(i64::from(route.end_slot()));

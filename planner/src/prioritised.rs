@@ -66,24 +66,11 @@ pub fn conflicts(grid: &Grid, routes: &[(u32, Route)], params: &PlanParams) -> u
     // Per cell: (vehicle, first slot, last slot) runs.
     let mut runs: BTreeMap<usize, Vec<(u32, i64, i64)>> = BTreeMap::new();
     for (v, r) in routes {
-        let n = r.cells.len();
-        let mut k = 0;
-        while k < n {
-            let c = r.cells[k];
-            let mut m = k;
-            while m + 1 < n && r.cells[m + 1] == c {
-                m += 1;
-            }
-            let s0 = i64::from(r.start_slot) + k as i64;
-            let s1 = if m + 1 == n {
-                i64::MAX / 4
-            } else {
-                i64::from(r.start_slot) + m as i64
-            };
+        for (c, s0, s1, parked) in r.runs() {
+            let s1 = if parked { i64::MAX / 4 } else { s1 };
             if grid.contains(c) {
                 runs.entry(grid.index(c)).or_default().push((*v, s0, s1));
             }
-            k = m + 1;
         }
     }
     let mut pairs = BTreeSet::new();

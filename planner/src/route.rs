@@ -57,6 +57,27 @@ impl Route {
         self.cells[k as usize]
     }
 
+    /// Runs of equal consecutive cells, in order: `(cell, first slot, last slot, last run)`.
+    /// The last run is where the vehicle parks (it holds that cell for ever after).
+    pub fn runs(&self) -> impl Iterator<Item = (Cell, i64, i64, bool)> + '_ {
+        let n = self.cells.len();
+        let mut k = 0;
+        std::iter::from_fn(move || {
+            if k >= n {
+                return None;
+            }
+            let c = self.cells[k];
+            let mut m = k;
+            while m + 1 < n && self.cells[m + 1] == c {
+                m += 1;
+            }
+            let first = i64::from(self.start_slot) + k as i64;
+            let last = i64::from(self.start_slot) + m as i64;
+            k = m + 1;
+            Some((c, first, last, k == n))
+        })
+    }
+
     /// One byte per step (see the module doc); `cells.len() - 1` bytes.
     pub fn moves(&self) -> Vec<u8> {
         self.cells

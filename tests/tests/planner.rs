@@ -241,7 +241,10 @@ fn swarm_plan_prints_each_route_from_start_to_goal_without_conflicts() {
         assert!(text.contains(&format!("vehicle {v}: ")), "{text}");
     }
     assert!(text.contains("conflicts: 0; planning time:"), "{text}");
-    assert!(v["plan_ms"]["per_route"].as_array().unwrap().len() == 3, "{v}");
+    assert!(
+        v["plan_ms"]["per_route"].as_array().unwrap().len() == 3,
+        "{v}"
+    );
 }
 
 #[test]
