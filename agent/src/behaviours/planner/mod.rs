@@ -174,13 +174,15 @@ impl Planner {
     /// Takes this vehicle's newest route if it is newer than what it flies, of the current
     /// term, and not already late.
     fn take_route(&mut self, tick: u64, act: &mut Act<Beacon, PlanNote>) {
-        let Some((plan, route)) = self.routes.get(&self.id) else {
-            return;
+        // Checked before the clone: this runs every tick and is almost always a no-op.
+        let plan = match self.routes.get(&self.id) {
+            Some((plan, _)) if *plan > self.plan => *plan,
+            _ => return,
         };
-        let (plan, route) = (*plan, route.clone());
-        if plan <= self.plan || matches!(self.mode, Mode::Arrived { .. }) {
+        if matches!(self.mode, Mode::Arrived { .. }) {
             return;
         }
+        let route = self.routes[&self.id].1.clone();
         self.plan = plan;
         let term = self.lead.map_or(0, |l| l.term);
         let slot = self.p.slot();
