@@ -242,6 +242,11 @@ pub struct StartLayout {
     /// at least `spacing` apart, and no three of a group on one line (seed 001 assumes it).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub scatter: f64,
+    /// A chain instead of a grid: robot 0 at the first point `[x, y]` of this polyline and
+    /// each next robot `spacing` further along it (arc length), every robot facing the one
+    /// before it (the head back along the first segment), as a snake laid along a corridor.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub path: Vec<[f64; 2]>,
 }
 
 /// One start group: the centre of its grid and its robots' heading.
@@ -280,6 +285,7 @@ impl Default for StartLayout {
             jitter: 0.0,
             heading_jitter_deg: 0.0,
             scatter: 0.0,
+            path: Vec::new(),
         }
     }
 }

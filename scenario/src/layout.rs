@@ -18,6 +18,10 @@ impl Config {
     /// uniform draw from the seed's `start` stream (a draw that is not `clear` is retried, up to
     /// 32 times, then the grid point is kept). `None` when the map has no room for that many.
     pub fn start_poses(&self, clear: impl Fn(f64, f64) -> bool) -> Option<Vec<(f64, f64, f64)>> {
+        if !self.robots.start.path.is_empty() {
+            let poses = self.path_poses();
+            return poses.iter().all(|p| clear(p.0, p.1)).then_some(poses);
+        }
         let r = &self.robots;
         let n = r.count as usize;
         let groups = self.start_group_count();
@@ -75,6 +79,36 @@ impl Config {
         Some(poses)
     }
 
+    /// A chain along `robots.start.path`: robot `i` at arc length `i * spacing` from the
+    /// first point, facing back along the path (towards robot `i - 1`; the head towards the
+    /// first point's side). Points beyond the path's end stay at its last point (validation
+    /// refuses a path too short for the count).
+    pub fn path_poses(&self) -> Vec<(f64, f64, f64)> {
+        let path = &self.robots.start.path;
+        let spacing = self.robots.start.spacing;
+        (0..self.robots.count as usize)
+            .map(|i| {
+                let (x, y, along) = point_at(path, i as f64 * spacing);
+                (x, y, crate::wrap_angle(along + std::f64::consts::PI))
+            })
+            .collect()
+    }
+
+    /// Two robots of `robots.start.path` that would start overlapping (bodies closer than
+    /// `2 * radius`), the first such pair by ids.
+    pub fn path_overlap(&self) -> Option<(u32, u32)> {
+        let poses = self.path_poses();
+        let min = 2.0 * self.robots.radius;
+        for (a, p) in poses.iter().enumerate() {
+            for (b, q) in poses.iter().enumerate().skip(a + 1) {
+                if (p.0 - q.0).powi(2) + (p.1 - q.1).powi(2) < min * min {
+                    return Some((a as u32, b as u32));
+                }
+            }
+        }
+        None
+    }
+
     /// Initial heading of every robot, radians (`robots.start.heading_deg`).
     pub fn start_heading(&self) -> f64 {
         self.robots.start.heading_deg.to_radians()
@@ -107,6 +141,9 @@ impl Config {
     /// The heading robot `id` is meant to start with, before any `heading_jitter_deg`:
     /// what a robot that can only count its own wheel turns takes as its initial heading.
     pub fn nominal_heading(&self, id: u32) -> f64 {
+        if !self.robots.start.path.is_empty() {
+            return self.path_poses().get(id as usize).map_or(0.0, |p| p.2);
+        }
         let (_, heading) = self.start_group_centre(self.start_group(id));
         crate::wrap_angle(heading.to_radians())
     }
@@ -282,4 +319,33 @@ pub fn collinear_with(pts: &[(f64, f64)], p: (f64, f64)) -> bool {
         }
     }
     false
+}
+
+/// Total length of a polyline.
+pub fn polyline_length(path: &[[f64; 2]]) -> f64 {
+    path.windows(2)
+        .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+        .sum()
+}
+
+/// The point at arc length `s` along `path` and the direction (radians) of the segment it
+/// lies on, pointing away from the first point; past the end, the last point.
+fn point_at(path: &[[f64; 2]], s: f64) -> (f64, f64, f64) {
+    let mut left = s;
+    let mut along = 0.0;
+    for w in path.windows(2) {
+        let (dx, dy) = (w[1][0] - w[0][0], w[1][1] - w[0][1]);
+        let len = dx.hypot(dy);
+        if len <= 0.0 {
+            continue;
+        }
+        along = dy.atan2(dx);
+        if left <= len {
+            let f = left / len;
+            return (w[0][0] + dx * f, w[0][1] + dy * f, along);
+        }
+        left -= len;
+    }
+    let last = path.last().copied().unwrap_or([0.0, 0.0]);
+    (last[0], last[1], along)
 }

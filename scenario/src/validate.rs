@@ -98,7 +98,9 @@ impl Config {
             "robots.start.group_sizes",
             "no sizes without robots.start.groups",
         )?;
-        if st.groups.is_empty() {
+        if !st.path.is_empty() {
+            self.validate_path()?;
+        } else if st.groups.is_empty() {
             for (key, v) in [("robots.start.x", st.x), ("robots.start.y", st.y)] {
                 let v = v.ok_or_else(|| {
                     (
@@ -257,6 +259,57 @@ impl Config {
             c.validate(self)?;
         }
 
+        Ok(())
+    }
+
+    /// `robots.start.path`: alone (no grid centre, groups or scatter), at least two points
+    /// inside the bounds, long enough for the chain, and no two robots overlapping on it.
+    fn validate_path(&self) -> Result<(), KeyError> {
+        let st = &self.robots.start;
+        check(
+            st.x.is_none() && st.y.is_none() && st.groups.is_empty() && st.scatter == 0.0,
+            "robots.start.path",
+            "either robots.start.path (a chain) or robots.start.x/y, groups or scatter, not both",
+        )?;
+        check(
+            st.path.len() >= 2,
+            "robots.start.path",
+            &format!("at least two points [x, y], got {}", st.path.len()),
+        )?;
+        for (i, &[x, y]) in st.path.iter().enumerate() {
+            let key = format!("robots.start.path[{i}]");
+            finite(&key, x)?;
+            finite(&key, y)?;
+            check(
+                self.inside_bounds(x, y, 0.0),
+                &key,
+                &format!(
+                    "a point inside map.bounds, got [{}, {}]",
+                    short(x),
+                    short(y)
+                ),
+            )?;
+        }
+        let need = (self.robots.count.max(1) - 1) as f64 * st.spacing;
+        let have = crate::layout::polyline_length(&st.path);
+        check(
+            have + 1e-9 >= need,
+            "robots.start.path",
+            &format!(
+                "a polyline at least (robots.count - 1) * spacing = {} m long, got {} m",
+                short(need),
+                short(have)
+            ),
+        )?;
+        if let Some((a, b)) = self.path_overlap() {
+            return Err((
+                "robots.start.path".to_string(),
+                format!(
+                    "a path on which robots do not overlap, but robots {a} and {b} start closer \
+                     than 2 * robots.radius (bends too sharp for this spacing)"
+                ),
+            ));
+        }
         Ok(())
     }
 

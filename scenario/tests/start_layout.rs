@@ -255,3 +255,63 @@ fn group_sizes_and_scatter_are_checked() {
     let c = load(SCATTER, &["robots.count=9", "robots.start.scatter=0.3"]).unwrap();
     assert!(c.start_poses(|_, _| true).is_none());
 }
+
+const PATH: &str = r#"
+[robots.start]
+spacing = 0.5
+path = [[1.0, 1.0], [1.0, 2.0], [3.0, 2.0]]
+"#;
+
+#[test]
+fn a_path_lays_the_chain_along_the_polyline_each_robot_facing_the_one_before() {
+    let c = load(PATH, &[]).unwrap();
+    let poses = c.start_poses(|_, _| true).unwrap();
+    let expected: [(f64, f64, f64); 5] = [
+        (1.0, 1.0, -90.0),
+        (1.0, 1.5, -90.0),
+        (1.0, 2.0, -90.0),
+        (1.5, 2.0, 180.0),
+        (2.0, 2.0, 180.0),
+    ];
+    for (p, e) in poses.iter().zip(expected) {
+        assert!(
+            (p.0 - e.0).abs() < 1e-12 && (p.1 - e.1).abs() < 1e-12,
+            "{p:?} {e:?}"
+        );
+        let dh = swarmrt_scenario::wrap_angle(p.2 - e.2.to_radians());
+        assert!(dh.abs() < 1e-12, "{p:?} {e:?}");
+    }
+    assert!((c.nominal_heading(3) - std::f64::consts::PI).abs() < 1e-12);
+    // A start point inside an obstacle is refused, not moved.
+    assert!(c.start_poses(|x, _| x < 1.8).is_none());
+}
+
+#[test]
+fn a_path_too_short_or_mixed_with_a_grid_is_refused_with_its_key() {
+    let e = load(PATH, &["robots.count=8"]).unwrap_err().to_string();
+    assert!(
+        e.contains("robots.start.path") && e.contains("3.5 m"),
+        "{e}"
+    );
+    let e = load(PATH, &["robots.start.x=2.0"]).unwrap_err().to_string();
+    assert!(
+        e.contains("robots.start.path") && e.contains("not both"),
+        "{e}"
+    );
+    let e = load(PATH, &["robots.start.path=[[1.0, 1.0]]"])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("at least two points"), "{e}");
+    let e = load(PATH, &["robots.start.path=[[1.0, 1.0], [1.0, 99.0]]"])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("robots.start.path[1]"), "{e}");
+    // A hairpin tighter than the bodies: robots 0 and 2 would overlap.
+    let e = load(
+        PATH,
+        &["robots.start.path=[[1.0, 1.0], [1.0, 1.5], [1.05, 1.5], [1.05, 0.2], [3.0, 0.2]]"],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("robots 0 and 2"), "{e}");
+}

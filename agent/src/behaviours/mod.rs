@@ -13,4 +13,5 @@ crate::registry::behaviours! {
     Flocking => flocking::Flocking,
     Grouping => grouping::Grouping,
     Planner => planner::Planner,
+    Chain => chain::Chain,
 }

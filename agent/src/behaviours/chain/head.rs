@@ -1,0 +1,134 @@
+//! The initiator's wall following with target seeking: the subsumption layers of Table 2
+//! (section 3, "Exploratory behaviour"), evaluated from the highest (6, KEEP-MOVING) to the
+//! lowest (1, CLOSE-LEFT); a lower layer that triggers overrides the ones above it, so
+//! collision avoidance has the last word.
+//!
+//! Readings of the paper we chose:
+//! - FAR-RIGHT / FAR-LEFT trigger on *leaving* a wall (Table 2's wording): a reading in
+//!   `(wall_max, wall_range]`. A reading beyond `wall_range` is no wall, so in open space the
+//!   head keeps its course or seeks the target instead of circling in search of a wall.
+//! - FAR-LEFT: leaving the left wall but not leaving the right one (Table 2), so a head with
+//!   only a left wall still follows it (the text's "and above the right reading" would not).
+//! - CLOSE-LEFT: close to the left wall and not close to the right one, or closer to the left
+//!   when both are close (the text's optimisation of 2.6): in a corridor narrower than twice
+//!   `wall_min` the head turns away from the nearer wall instead of always to the left.
+//! - Table 2 lists KEEP-MOVING again after CLOSE-LEFT; we read it as the table's wrap-around
+//!   (the stack starts over at the next tick), not as a seventh layer.
+
+use swarmrt_protocol::Observation;
+use swarmrt_scenario::LidarConfig;
+
+use super::params::ChainParams;
+
+/// A layer of Table 2, by priority number.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layer {
+    /// 6: always; both wheels at s.
+    KeepMoving,
+    /// 5: the target is seen; wheels steer to it (both stop at it with `stop_at_target`).
+    TargetCheck,
+    /// 4: leaving the right wall; turn right (vl = s, vr = 0).
+    FarRight,
+    /// 3: leaving the left wall but not the right one; turn left (vl = 0, vr = s).
+    FarLeft,
+    /// 2: wall close to the right; turn left (vl = 0, vr = s).
+    CloseRight,
+    /// 1: wall close to the left but not to the right; turn right (vl = s, vr = 0).
+    CloseLeft,
+}
+
+/// The two side readings of step 1: nearest obstacle at the left-front and right-front, in
+/// metres (the lidar's range when nothing is seen).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sides {
+    /// Left-front.
+    pub left: f64,
+    /// Right-front.
+    pub right: f64,
+}
+
+/// What TARGET-CHECK knows of the target.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Target {
+    /// Bearing in the robot frame, radians (positive: left).
+    pub bearing: f64,
+    /// The head is at the target.
+    pub reached: bool,
+}
+
+/// Wheel speeds (m/s) as Table 2 writes them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Wheels {
+    /// Left wheel.
+    pub vl: f64,
+    /// Right wheel.
+    pub vr: f64,
+}
+
+/// The nearest lidar hit in the left-front sector `[from, to]` degrees and the right-front
+/// one `[-to, -from]`.
+pub fn sides(obs: &Observation, lidar: &LidarConfig, sector_deg: [f64; 2]) -> Sides {
+    let (from, to) = (sector_deg[0].to_radians(), sector_deg[1].to_radians());
+    let mut s = Sides {
+        left: lidar.range,
+        right: lidar.range,
+    };
+    for k in 0..obs.lidar_len as usize {
+        let a = swarmrt_scenario::wrap_angle(lidar.ray_angle(k));
+        let d = obs.lidar[k];
+        if (from..=to).contains(&a) {
+            s.left = s.left.min(d);
+        } else if (-to..=-from).contains(&a) {
+            s.right = s.right.min(d);
+        }
+    }
+    s
+}
+
+/// Table 2: the layer whose output drives the head and its wheel speeds.
+pub fn subsume(sides: Sides, target: Option<Target>, p: &ChainParams) -> (Layer, Wheels) {
+    let s = p.speed;
+    let leaving = |d: f64| d > p.wall_max && d <= p.wall_range;
+    let close = |d: f64| d < p.wall_min;
+    let mut out = (Layer::KeepMoving, Wheels { vl: s, vr: s });
+    if let Some(t) = target {
+        let wheels = if t.reached && p.stop_at_target {
+            Wheels { vl: 0.0, vr: 0.0 }
+        } else {
+            let turn = (p.target_gain * t.bearing).clamp(-1.0, 1.0);
+            if turn >= 0.0 {
+                Wheels {
+                    vl: s * (1.0 - turn),
+                    vr: s,
+                }
+            } else {
+                Wheels {
+                    vl: s,
+                    vr: s * (1.0 + turn),
+                }
+            }
+        };
+        out = (Layer::TargetCheck, wheels);
+    }
+    if leaving(sides.right) {
+        out = (Layer::FarRight, Wheels { vl: s, vr: 0.0 });
+    }
+    if leaving(sides.left) && !leaving(sides.right) {
+        out = (Layer::FarLeft, Wheels { vl: 0.0, vr: s });
+    }
+    if close(sides.right) {
+        out = (Layer::CloseRight, Wheels { vl: 0.0, vr: s });
+    }
+    if close(sides.left) && (!close(sides.right) || sides.left < sides.right) {
+        out = (Layer::CloseLeft, Wheels { vl: s, vr: 0.0 });
+    }
+    out
+}
+
+/// A differential drive's `(v, omega)` from its wheel speeds over `axle`, the turn rate
+/// limited to `max_turn_rate`.
+pub fn unicycle(w: Wheels, axle: f64, max_turn_rate: f64) -> (f64, f64) {
+    let v = (w.vl + w.vr) / 2.0;
+    let omega = ((w.vr - w.vl) / axle).clamp(-max_turn_rate, max_turn_rate);
+    (v, omega)
+}

@@ -1,0 +1,256 @@
+//! The chain's metrics, from the true poses in `trajectory.csv` and the robots' notes, so
+//! both modes give the same numbers.
+//!
+//! - `rod_violations`: rod-ticks (a pair of consecutive robots, both active, at one tick)
+//!   with a length outside `[rod_min - rod_tolerance, rod_max + rod_tolerance]`; out of
+//!   `rod_ticks`, with the extreme lengths seen.
+//! - `angle_violations`: connector-ticks (a robot and both neighbours active) with an angle
+//!   outside `[angle_min - tol, angle_max + tol]`, out of `angle_ticks`.
+//! - `vetoes`: vetoes raised (a robot starting to object: depth 1); `veto_depth`: the most
+//!   robots one veto travelled (a passed veto counts each robot it reached, the initiator
+//!   included); `replans`: vetoes that reached the initiator.
+//! - `propagation_ticks`: ticks from the initiator's first move to the last chain end's
+//!   first move (a robot moves when it is 2 cm off its start), and per robot between them.
+//! - `head_progress`: how much nearer the goal the initiator ended than it started, in
+//!   metres; `head_path`: the length of its path.
+//! - `collisions`, `reached`, and whether and when the tail reached the target.
+
+use serde_json::{Value, json};
+use swarmrt_protocol::records::Records;
+use swarmrt_scenario::Config;
+
+use super::params::ChainParams;
+use super::rods::connector_angle;
+use crate::behaviour::{Series, SeriesPlot};
+
+/// The metrics [`metrics`] computes, as dotted paths into metrics.json.
+pub const NAMES: [&str; 12] = [
+    "chain.rod_violations",
+    "chain.angle_violations",
+    "chain.vetoes",
+    "chain.veto_depth",
+    "chain.replans",
+    "chain.propagation_ticks",
+    "chain.propagation_per_robot",
+    "chain.head_progress",
+    "chain.head_path",
+    "chain.collisions",
+    "chain.reached",
+    "chain.tail_reached",
+];
+
+/// Metres off its start position at which a robot counts as moved.
+const MOVED: f64 = 0.02;
+
+/// The tick each robot first moved (`None`: never).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FirstMoves(pub Vec<Option<u64>>);
+
+/// The tick each robot first moved by [`MOVED`] from its first recorded position.
+pub fn first_moves(run: &Records) -> FirstMoves {
+    let Some(first) = run.ticks.first() else {
+        return FirstMoves(Vec::new());
+    };
+    let start: Vec<(f64, f64)> = first.iter().map(|r| (r.x, r.y)).collect();
+    let mut out = vec![None; start.len()];
+    for rows in &run.ticks {
+        for r in rows {
+            let i = r.id as usize;
+            if i < out.len()
+                && out[i].is_none()
+                && (r.x - start[i].0).hypot(r.y - start[i].1) > MOVED
+            {
+                out[i] = Some(r.tick);
+            }
+        }
+    }
+    FirstMoves(out)
+}
+
+/// The ends of the chain other than the initiator.
+fn ends(n: usize, initiator: usize) -> Vec<usize> {
+    let mut e = vec![n - 1];
+    if n > 1 {
+        e.insert(0, 0);
+    }
+    e.retain(|&x| x != initiator);
+    e.dedup();
+    e
+}
+
+/// The chain's metrics.
+pub fn metrics(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<(&'static str, Value)> {
+    let n = cfg.robots.count as usize;
+    let c = (p.initiator as usize).min(n.saturating_sub(1));
+    let (rod_lo, rod_hi) = (p.rod_min - p.rod_tolerance, p.rod_max + p.rod_tolerance);
+    let tol = p.angle_tolerance_deg.to_radians();
+    let (ang_lo, ang_hi) = (
+        p.angle_min_deg.to_radians() - tol,
+        p.angle_max_deg.to_radians() + tol,
+    );
+    let (mut rod_ticks, mut rod_bad, mut angle_ticks, mut angle_bad) = (0u64, 0u64, 0u64, 0u64);
+    let (mut longest, mut shortest) = (0.0f64, f64::INFINITY);
+    let mut sharpest = f64::INFINITY;
+    for rows in &run.ticks {
+        for w in rows.windows(2) {
+            if w[0].active && w[1].active && w[1].id == w[0].id + 1 {
+                let len = (w[1].x - w[0].x).hypot(w[1].y - w[0].y);
+                rod_ticks += 1;
+                rod_bad += u64::from(len < rod_lo || len > rod_hi);
+                longest = longest.max(len);
+                shortest = shortest.min(len);
+            }
+        }
+        for w in rows.windows(3) {
+            if w.iter().all(|r| r.active) && w[2].id == w[0].id + 2 {
+                let a = connector_angle((w[0].x, w[0].y), (w[1].x, w[1].y), (w[2].x, w[2].y));
+                angle_ticks += 1;
+                angle_bad += u64::from(a < ang_lo || a > ang_hi);
+                sharpest = sharpest.min(a);
+            }
+        }
+    }
+    let (mut vetoes, mut depth, mut replans) = (0u64, 0u64, 0u64);
+    for note in run.notes() {
+        if let Some(d) = note["veto"]["depth"].as_u64() {
+            vetoes += u64::from(d == 1);
+            depth = depth.max(d);
+        }
+        if let Some(d) = note["replan"]["depth"].as_u64() {
+            replans += 1;
+            depth = depth.max(d);
+        }
+    }
+    let moves = first_moves(run);
+    let t0 = moves.0.get(c).copied().flatten();
+    let ends = if n > 0 { ends(n, c) } else { Vec::new() };
+    let propagation = t0.and_then(|t0| {
+        ends.iter()
+            .map(|&e| moves.0.get(e).copied().flatten().map(|t| t.saturating_sub(t0)))
+            .collect::<Option<Vec<u64>>>()
+            .and_then(|v| v.into_iter().max())
+    });
+    let hops = ends.iter().map(|&e| e.abs_diff(c)).max().unwrap_or(0);
+    let goal = cfg.goal_of(p.initiator);
+    let head: Vec<(f64, f64)> = run
+        .ticks
+        .iter()
+        .filter_map(|rows| rows.iter().find(|r| r.id as usize == c))
+        .map(|r| (r.x, r.y))
+        .collect();
+    let to_goal = |q: &(f64, f64)| (q.0 - goal.x).hypot(q.1 - goal.y);
+    let progress = match (head.first(), head.last()) {
+        (Some(a), Some(b)) => to_goal(a) - to_goal(b),
+        _ => 0.0,
+    };
+    let path: f64 = head
+        .windows(2)
+        .map(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1))
+        .sum();
+    let tail = ends.last().copied();
+    let tail_tick = run
+        .events_of("reached")
+        .find(|e| tail.is_some_and(|t| e["robot"].as_u64() == Some(t as u64)))
+        .and_then(|e| e["tick"].as_u64());
+    let finite = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
+    let all = json!({
+        "rod_violations": rod_bad,
+        "rod_ticks": rod_ticks,
+        "rod_longest": finite(if rod_ticks > 0 { longest } else { f64::NAN }),
+        "rod_shortest": finite(shortest),
+        "angle_violations": angle_bad,
+        "angle_ticks": angle_ticks,
+        "angle_sharpest_deg": finite(sharpest.to_degrees()),
+        "vetoes": vetoes,
+        "veto_depth": depth,
+        "replans": replans,
+        "propagation_ticks": propagation,
+        "propagation_per_robot": propagation.filter(|_| hops > 0).map(|t| t as f64 / hops as f64),
+        "head_progress": progress,
+        "head_path": path,
+        "collisions": run.events_of("collision").count(),
+        "reached": run.events_of("reached").count(),
+        "tail_reached": tail_tick.is_some(),
+        "tail_reached_tick": tail_tick,
+    });
+    vec![("chain", all)]
+}
+
+/// Per tick: the longest and shortest rod and the sharpest connector (`chain.csv`, drawn as
+/// `chain_rods.png`); per robot: the tick it first moved (`chain_propagation.csv`, the wave
+/// of a motion travelling down the chain).
+pub fn series(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<Series> {
+    let dt = cfg.scenario.dt;
+    let mut rows = Vec::new();
+    for tick in &run.ticks {
+        let mut longest = f64::NAN;
+        let mut shortest = f64::NAN;
+        let mut sharpest = f64::NAN;
+        for w in tick.windows(2) {
+            if w[0].active && w[1].active && w[1].id == w[0].id + 1 {
+                let len = (w[1].x - w[0].x).hypot(w[1].y - w[0].y);
+                longest = longest.max(len);
+                shortest = shortest.min(len);
+            }
+        }
+        for w in tick.windows(3) {
+            if w.iter().all(|r| r.active) && w[2].id == w[0].id + 2 {
+                let a = connector_angle((w[0].x, w[0].y), (w[1].x, w[1].y), (w[2].x, w[2].y));
+                sharpest = sharpest.min(a.to_degrees());
+            }
+        }
+        let t = tick.first().map_or(0, |r| r.tick);
+        rows.push(vec![
+            t as f64,
+            t as f64 * dt,
+            longest,
+            shortest,
+            p.rod_max,
+            p.rod_min,
+            sharpest,
+        ]);
+    }
+    let moves = first_moves(run);
+    let wave = moves
+        .0
+        .iter()
+        .enumerate()
+        .filter_map(|(i, t)| t.map(|t| vec![i as f64, t as f64, t as f64 * dt]))
+        .collect();
+    vec![
+        Series {
+            name: "chain",
+            columns: vec![
+                "tick",
+                "time_s",
+                "longest_rod",
+                "shortest_rod",
+                "rod_max",
+                "rod_min",
+                "sharpest_angle_deg",
+            ],
+            rows,
+            plots: vec![SeriesPlot {
+                file: "chain_rods",
+                title: format!("{}: longest and shortest rod", cfg.scenario.name),
+                x: "time_s",
+                lines: vec!["longest_rod", "shortest_rod", "rod_max", "rod_min"],
+                group_by: None,
+                y_label: "rod length (m)",
+            }],
+        },
+        Series {
+            name: "chain_propagation",
+            columns: vec!["robot", "first_move_tick", "first_move_s"],
+            rows: wave,
+            plots: vec![SeriesPlot {
+                file: "chain_propagation",
+                title: format!("{}: when each robot first moved", cfg.scenario.name),
+                x: "robot",
+                lines: vec!["first_move_tick"],
+                group_by: None,
+                y_label: "tick",
+            }],
+        },
+    ]
+}

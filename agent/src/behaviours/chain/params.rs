@@ -1,0 +1,176 @@
+//! `[behaviour]` of `kind = "chain"`: the rods and connectors of section 3 (Table 1), the
+//! head's wall distances of section 3 "Exploratory behaviour" (0.7 and 0.9 m), and the
+//! choices the paper leaves open (how a master's motion reaches its slave, how long a veto
+//! lasts, how a head re-plans).
+
+use serde::{Deserialize, Serialize};
+use swarmrt_scenario::validate::{check, range_f, range_u64, short};
+use swarmrt_scenario::{Config, KeyError};
+
+use crate::behaviour::Params;
+
+/// Where a slave learns its master's position (the issue asks us to choose; both are
+/// measured in `docs/results/seed003.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MasterFrom {
+    /// Its own range-and-bearing sensor (section 2: "using vision"); no loss, no delay, one
+    /// tick per hop because the slave sees its master only after the master moved.
+    Rab,
+    /// The master's radio `Link` frames only: `1 + radio.delay_ticks` ticks per hop, and a
+    /// lost frame leaves the slave with an older position.
+    Radio,
+    /// Range-and-bearing when the master is in view, else its latest radio frame.
+    Both,
+}
+
+/// Parameters of the chain behaviour.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ChainParams {
+    /// Rod MinLength in metres (Table 1): closer than this, the master pushes its slave.
+    pub rod_min: f64,
+    /// Rod MaxLength in metres: farther than this, the master pulls its slave.
+    pub rod_max: f64,
+    /// Connector MinAngle in degrees: the angle at a robot between its two chain neighbours
+    /// (180 = straight) is kept at least this.
+    pub angle_min_deg: f64,
+    /// Connector MaxAngle in degrees.
+    pub angle_max_deg: f64,
+    /// Metres a rod may be outside `[rod_min, rod_max]` before `chain.rod_violations` counts
+    /// it (a slave process sees its master one tick late, so some excess is physics).
+    pub rod_tolerance: f64,
+    /// Degrees a connector may be outside its angle limits before `chain.angle_violations`
+    /// counts it.
+    pub angle_tolerance_deg: f64,
+    /// The robot that initiates the motion (section 3: "any part of the chain ... can
+    /// initiate"); the chain is then two sub-chains headed by it (Fig. 3).
+    pub initiator: u32,
+    /// Stationary (fixed) robots: they never move and veto any relocation (Fig. 3).
+    pub stationary: Vec<u32>,
+    /// s of Table 2: the initiator's wheel speed in m/s (at most `robots.max_speed`; the
+    /// other robots may use the full `robots.max_speed` to keep up).
+    pub speed: f64,
+    /// Axle length in metres, turning Table 2's wheel speeds into a turn rate.
+    pub axle: f64,
+    /// Minimum wall distance of the wall following in metres (0.7 in the paper).
+    pub wall_min: f64,
+    /// Maximum wall distance in metres (0.9 in the paper).
+    pub wall_max: f64,
+    /// A side reading beyond this is no wall at all: FAR-RIGHT and FAR-LEFT trigger on
+    /// "leaving" a wall (Table 2), i.e. a reading in `(wall_max, wall_range]`, so in open
+    /// space the head keeps its course (or seeks the target) instead of circling.
+    pub wall_range: f64,
+    /// The side sectors `[from, to]` in degrees off the heading: the left-front reading is
+    /// the nearest lidar hit in `[from, to]`, the right-front one in `[-to, -from]`.
+    pub side_sector_deg: [f64; 2],
+    /// Gain of TARGET-CHECK's turn towards the target (per radian of bearing).
+    pub target_gain: f64,
+    /// The initiator stops for good once it has reached the target; otherwise it passes
+    /// through and keeps wall following, so the whole chain threads the target.
+    pub stop_at_target: bool,
+    /// Degrees the initiator turns in place after a veto reached it (its re-plan), towards
+    /// the side with more room.
+    pub replan_turn_deg: f64,
+    /// Where a slave learns its master's position.
+    pub master_from: MasterFrom,
+    /// Master positions a slave remembers (its trail, for Push-Pull-Rotate, Fig. 5).
+    pub trail: u32,
+    /// Metres of clearance beyond `robots.radius` a guiding line needs from any lidar hit to
+    /// count as collision free.
+    pub line_clearance: f64,
+    /// Ticks a slave may find no collision-free guiding line before it vetoes (trapped).
+    pub trapped_ticks: u32,
+    /// Ticks a heard veto keeps holding (the veto is repeated every tick while it lasts, so
+    /// this rides over lost frames).
+    pub veto_hold: u32,
+    /// Turn gain of a robot steering to its target point (rad/s per radian).
+    pub turn_gain: f64,
+}
+
+impl Default for ChainParams {
+    fn default() -> Self {
+        ChainParams {
+            rod_min: 0.3,
+            rod_max: 0.45,
+            angle_min_deg: 90.0,
+            angle_max_deg: 180.0,
+            rod_tolerance: 0.05,
+            angle_tolerance_deg: 10.0,
+            initiator: 0,
+            stationary: Vec::new(),
+            speed: 0.2,
+            axle: 0.2,
+            wall_min: 0.7,
+            wall_max: 0.9,
+            wall_range: 1.5,
+            side_sector_deg: [15.0, 90.0],
+            target_gain: 1.0,
+            stop_at_target: false,
+            replan_turn_deg: 90.0,
+            master_from: MasterFrom::Both,
+            trail: 64,
+            line_clearance: 0.15,
+            trapped_ticks: 20,
+            veto_hold: 3,
+            turn_gain: 3.0,
+        }
+    }
+}
+
+impl Params for ChainParams {
+    fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
+        let r = &cfg.robots;
+        range_f("behaviour.rod_min", self.rod_min, 2.0 * r.radius, 1e3).map_err(|(k, _)| {
+            (
+                k,
+                format!(
+                    "a length in [2 * robots.radius = {}, 1000] so neighbours never touch, got {}",
+                    short(2.0 * r.radius),
+                    short(self.rod_min)
+                ),
+            )
+        })?;
+        range_f("behaviour.rod_max", self.rod_max, self.rod_min, 1e3)?;
+        range_f("behaviour.angle_min_deg", self.angle_min_deg, 0.0, 180.0)?;
+        range_f(
+            "behaviour.angle_max_deg",
+            self.angle_max_deg,
+            self.angle_min_deg,
+            180.0,
+        )?;
+        range_f("behaviour.rod_tolerance", self.rod_tolerance, 0.0, 1e3)?;
+        range_f(
+            "behaviour.angle_tolerance_deg",
+            self.angle_tolerance_deg,
+            0.0,
+            180.0,
+        )?;
+        let n = r.count.max(1);
+        range_u64("behaviour.initiator", self.initiator as u64, 0, n as u64 - 1)?;
+        for (k, &s) in self.stationary.iter().enumerate() {
+            range_u64(&format!("behaviour.stationary[{k}]"), s as u64, 0, n as u64 - 1)?;
+            check(
+                s != self.initiator,
+                &format!("behaviour.stationary[{k}]"),
+                "a robot other than behaviour.initiator (the initiator moves)",
+            )?;
+        }
+        range_f("behaviour.speed", self.speed, 0.0, r.max_speed)?;
+        range_f("behaviour.axle", self.axle, 1e-4, 100.0)?;
+        range_f("behaviour.wall_min", self.wall_min, 0.0, 1e3)?;
+        range_f("behaviour.wall_max", self.wall_max, self.wall_min, 1e3)?;
+        range_f("behaviour.wall_range", self.wall_range, self.wall_max, 1e3)?;
+        let [from, to] = self.side_sector_deg;
+        range_f("behaviour.side_sector_deg[0]", from, 0.0, 180.0)?;
+        range_f("behaviour.side_sector_deg[1]", to, from, 180.0)?;
+        range_f("behaviour.target_gain", self.target_gain, 0.0, 1e3)?;
+        range_f("behaviour.replan_turn_deg", self.replan_turn_deg, 0.0, 360.0)?;
+        range_u64("behaviour.trail", self.trail as u64, 1, 10_000)?;
+        range_f("behaviour.line_clearance", self.line_clearance, 0.0, 1e3)?;
+        range_u64("behaviour.trapped_ticks", self.trapped_ticks as u64, 1, 1_000_000)?;
+        range_u64("behaviour.veto_hold", self.veto_hold as u64, 1, 1_000_000)?;
+        range_f("behaviour.turn_gain", self.turn_gain, 0.0, 1e3)?;
+        Ok(())
+    }
+}
