@@ -297,8 +297,8 @@ impl Config {
             "robots.start.path",
             &format!(
                 "a polyline at least (robots.count - 1) * spacing = {} m long, got {} m",
-                short(need),
-                short(have)
+                short((need * 1e9).round() / 1e9),
+                short((have * 1e9).round() / 1e9)
             ),
         )?;
         if let Some((a, b)) = self.path_overlap() {

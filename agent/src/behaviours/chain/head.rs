@@ -12,6 +12,11 @@
 //! - CLOSE-LEFT: close to the left wall and not close to the right one, or closer to the left
 //!   when both are close (the text's optimisation of 2.6): in a corridor narrower than twice
 //!   `wall_min` the head turns away from the nearer wall instead of always to the left.
+//! - FAR-RIGHT and FAR-LEFT stay silent while the target is in sight (the goal sensor, which
+//!   obstacles occlude): walls are followed to find the target, and a head that keeps
+//!   hugging a pillar after it sees the target would orbit it for ever (TARGET-CHECK sits
+//!   above them in the stack, so read literally they would always override it). CLOSE-RIGHT
+//!   and CLOSE-LEFT, the collision avoidance, always apply.
 //! - Table 2 lists KEEP-MOVING again after CLOSE-LEFT; we read it as the table's wrap-around
 //!   (the stack starts over at the next tick), not as a seventh layer.
 
@@ -66,16 +71,28 @@ pub struct Wheels {
 }
 
 /// The nearest lidar hit in the left-front sector `[from, to]` degrees and the right-front
-/// one `[-to, -from]`.
-pub fn sides(obs: &Observation, lidar: &LidarConfig, sector_deg: [f64; 2]) -> Sides {
+/// one `[-to, -from]`. Hits within `body` metres of a robot that range-and-bearing reports
+/// are that robot, not a wall: the head follows walls, not its own chain curling beside it.
+pub fn sides(obs: &Observation, lidar: &LidarConfig, sector_deg: [f64; 2], body: f64) -> Sides {
     let (from, to) = (sector_deg[0].to_radians(), sector_deg[1].to_radians());
     let mut s = Sides {
         left: lidar.range,
         right: lidar.range,
     };
+    let robots: Vec<(f64, f64)> = obs.neighbours[..obs.neighbours_len as usize]
+        .iter()
+        .map(|n| (n.range * n.bearing.cos(), n.range * n.bearing.sin()))
+        .collect();
     for k in 0..obs.lidar_len as usize {
         let a = swarmrt_scenario::wrap_angle(lidar.ray_angle(k));
         let d = obs.lidar[k];
+        let hit = (d * a.cos(), d * a.sin());
+        if robots
+            .iter()
+            .any(|r| (r.0 - hit.0).hypot(r.1 - hit.1) <= body)
+        {
+            continue;
+        }
         if (from..=to).contains(&a) {
             s.left = s.left.min(d);
         } else if (-to..=-from).contains(&a) {
@@ -110,10 +127,12 @@ pub fn subsume(sides: Sides, target: Option<Target>, p: &ChainParams) -> (Layer,
         };
         out = (Layer::TargetCheck, wheels);
     }
-    if leaving(sides.right) {
+    // Walls are followed to find the target; once it is in sight, leaving a wall is fine.
+    let seeking = target.is_none();
+    if seeking && leaving(sides.right) {
         out = (Layer::FarRight, Wheels { vl: s, vr: 0.0 });
     }
-    if leaving(sides.left) && !leaving(sides.right) {
+    if seeking && leaving(sides.left) && !leaving(sides.right) {
         out = (Layer::FarLeft, Wheels { vl: 0.0, vr: s });
     }
     if close(sides.right) {

@@ -214,6 +214,17 @@ impl Chain {
         Some(target)
     }
 
+    /// A vetoed robot's adaptation to the slave `s` that vetoed: back onto the guiding line
+    /// at the middle of the rod's range when the rod is out of its limits, so the event ends
+    /// (a rod left at exactly `rod_max` would keep a stationary slave objecting for ever).
+    fn give_way(&self, s: P, me: P) -> P {
+        let mid = (self.p.rod_min + self.p.rod_max) / 2.0;
+        match adapt(s, me, self.p.rod_min, self.p.rod_max, 0.0) {
+            (Reaction::Resize, _) => me,
+            _ => adapt(s, me, mid, mid, 0.0).1,
+        }
+    }
+
     fn drive(&self, obs: &Observation, target: P, act: &mut Act<Link, ChainNote>) {
         (act.v, act.omega) = steer(
             (obs.x, obs.y, obs.theta),
@@ -270,7 +281,7 @@ impl Chain {
             let Some(s) = self.locate(obs, v.from) else {
                 return (0, None);
             };
-            let (_, target) = adapt(s, (obs.x, obs.y), self.p.rod_min, self.p.rod_max, 0.0);
+            let target = self.give_way(s, (obs.x, obs.y));
             self.drive(obs, target, act);
             return match m {
                 Some(m) if out_of_rod(target, m) => {
@@ -302,7 +313,7 @@ impl Chain {
 
     /// The initiator's tick: Table 2, unless a veto stopped it.
     fn lead(&mut self, obs: &Observation, act: &mut Act<Link, ChainNote>) {
-        let sides = sides(obs, &self.lidar, self.p.side_sector_deg);
+        let sides = sides(obs, &self.lidar, self.p.side_sector_deg, 1.5 * self.radius);
         if let Some(v) = self.veto_in.filter(|v| obs.tick < v.until) {
             if self.replan.is_none() {
                 let turn = self.p.replan_turn_deg.to_radians();
@@ -315,7 +326,7 @@ impl Chain {
             }
             self.turning = (0, 0.0);
             if let Some(s) = self.locate(obs, v.from) {
-                let (_, target) = adapt(s, (obs.x, obs.y), self.p.rod_min, self.p.rod_max, 0.0);
+                let target = self.give_way(s, (obs.x, obs.y));
                 self.drive(obs, target, act);
             }
             return;
