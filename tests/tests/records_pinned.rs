@@ -230,6 +230,31 @@ fn planner_uav3_leader_dies() {
 }
 
 #[test]
+fn chain_corridor() {
+    check("chain_corridor", false);
+}
+
+#[test]
+fn chain_stationary() {
+    check("chain_stationary", false);
+}
+
+#[test]
+fn chain_middle() {
+    check("chain_middle", false);
+}
+
+#[test]
+fn chain_snake_140() {
+    check("chain_snake_140", false);
+}
+
+#[test]
+fn chain_450() {
+    check("chain_450", false);
+}
+
+#[test]
 fn raft_election() {
     check("raft_election", true);
 }
