@@ -178,7 +178,8 @@ pub fn metrics(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<(&'static st
 
 /// Per tick: the longest and shortest rod and the sharpest connector (`chain.csv`, drawn as
 /// `chain_rods.png`); per robot: the tick it first moved (`chain_propagation.csv`, the wave
-/// of a motion travelling down the chain).
+/// of a motion travelling down the chain); per veto note: who and when (`chain_vetoes.csv`,
+/// when there were vetoes).
 pub fn series(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<Series> {
     let dt = cfg.scenario.dt;
     let mut rows = Vec::new();
@@ -217,7 +218,26 @@ pub fn series(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<Series> {
         .enumerate()
         .filter_map(|(i, t)| t.map(|t| vec![i as f64, t as f64, t as f64 * dt]))
         .collect();
-    vec![
+    // Veto events: a depth-1 veto opens one, the vetoes it passes on and the re-plan belong
+    // to it (Fig. 3's back-propagation, one line per event).
+    let mut vetoes = Vec::new();
+    let mut event = 0u64;
+    for e in run.events_of("note") {
+        let (robot, tick) = (e["robot"].as_u64(), e["tick"].as_u64());
+        let n = &e["note"];
+        let depth = n["veto"]["depth"].as_u64().or(n["replan"]["depth"].as_u64());
+        if let (Some(robot), Some(tick), Some(depth)) = (robot, tick, depth) {
+            event += u64::from(n["veto"]["depth"].as_u64() == Some(1));
+            vetoes.push(vec![
+                tick as f64,
+                tick as f64 * dt,
+                robot as f64,
+                depth as f64,
+                event as f64,
+            ]);
+        }
+    }
+    let mut out = vec![
         Series {
             name: "chain",
             columns: vec![
@@ -252,5 +272,24 @@ pub fn series(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<Series> {
                 y_label: "tick",
             }],
         },
-    ]
+    ];
+    if !vetoes.is_empty() {
+        out.push(Series {
+            name: "chain_vetoes",
+            columns: vec!["tick", "time_s", "robot", "depth", "event"],
+            rows: vetoes,
+            plots: vec![SeriesPlot {
+                file: "chain_vetoes",
+                title: format!(
+                    "{}: vetoes travelling back to the initiator",
+                    cfg.scenario.name
+                ),
+                x: "tick",
+                lines: vec!["robot"],
+                group_by: Some("event"),
+                y_label: "robot",
+            }],
+        });
+    }
+    out
 }

@@ -413,10 +413,11 @@ impl Behaviour for Chain {
                     depth: msg.veto,
                     until: obs.tick + self.p.veto_hold as u64,
                 });
-            } else if k > 0 && msg.veto > 0 {
-                if let Some(v) = self.veto_in.as_mut().filter(|v| v.from == h.src) {
-                    v.until = obs.tick + self.p.veto_hold as u64;
-                }
+            } else if k > 0
+                && msg.veto > 0
+                && let Some(v) = self.veto_in.as_mut().filter(|v| v.from == h.src)
+            {
+                v.until = obs.tick + self.p.veto_hold as u64;
             }
         }
         let (veto, why) = if self.master.is_some() {
