@@ -92,7 +92,6 @@ fn params() -> ChainParams {
         speed: 0.2,
         wall_min: 0.7,
         wall_max: 0.9,
-        wall_range: 1.5,
         target_gain: 1.0,
         ..ChainParams::default()
     }
@@ -106,22 +105,22 @@ fn row(left: f64, right: f64, target: Option<Target>) -> (Layer, Wheels) {
 fn table_2_row_by_row() {
     let s = 0.2;
     let w = |vl: f64, vr: f64| Wheels { vl, vr };
-    // 6 KEEP-MOVING: no wall within range.
-    assert_eq!(row(2.0, 2.0, None), (Layer::KeepMoving, w(s, s)));
-    // Walls inside the band [0.7, 0.9] on both sides: keep moving too.
+    // 6 KEEP-MOVING: walls inside the band [0.7, 0.9] on both sides.
     assert_eq!(row(0.8, 0.8, None), (Layer::KeepMoving, w(s, s)));
     // 5 TARGET-CHECK: the target 0.5 rad to the left slows the left wheel by half.
     let t = Target {
         bearing: 0.5,
         reached: false,
     };
-    assert_eq!(row(2.0, 2.0, Some(t)), (Layer::TargetCheck, w(0.5 * s, s)));
+    assert_eq!(row(0.8, 0.8, Some(t)), (Layer::TargetCheck, w(0.5 * s, s)));
     // 4 FAR-RIGHT: leaving the right wall, turn right.
     assert_eq!(row(0.8, 1.2, None), (Layer::FarRight, w(s, 0.0)));
     // 3 FAR-LEFT: leaving the left wall but not the right one, turn left ...
     assert_eq!(row(1.2, 0.8, None), (Layer::FarLeft, w(0.0, s)));
-    // ... and leaving both, FAR-RIGHT keeps the word.
+    // ... and leaving both (or seeing no wall at all), FAR-RIGHT keeps the word: the head
+    // looks for a wall to its right.
     assert_eq!(row(1.2, 1.3, None), (Layer::FarRight, w(s, 0.0)));
+    assert_eq!(row(2.0, 2.0, None), (Layer::FarRight, w(s, 0.0)));
     // 2 CLOSE-RIGHT: wall close to the right, turn left (overrides FAR-LEFT).
     assert_eq!(row(1.2, 0.5, None), (Layer::CloseRight, w(0.0, s)));
     // 1 CLOSE-LEFT: wall close to the left but not the right, turn right (overrides FAR-RIGHT).
@@ -143,8 +142,8 @@ fn table_2_row_by_row() {
     };
     let (layer, wheels) = subsume(
         Sides {
-            left: 2.0,
-            right: 2.0,
+            left: 0.8,
+            right: 0.8,
         },
         Some(at),
         &p,
@@ -277,10 +276,11 @@ fn a_veto_that_reaches_the_head_stops_it_then_it_turns_in_place_and_goes_on() {
     let cfg = config();
     let mut head = brain(&cfg, 0);
     let mut act = Act::default();
-    // Unvetoed, in open space with the goal out of sight: keeps moving at s.
+    // Unvetoed, in open space with the goal out of sight: FAR-RIGHT, it turns right looking
+    // for a wall (vl = s, vr = 0 over the 0.2 m axle: v = s / 2, omega = -s / axle).
     head.step(&obs(0, 1, (3.0, 1.0), &[(1, 2.6, 1.0)]), &[], &mut act);
     assert!(
-        (act.v - 0.2).abs() < EPS && act.omega.abs() < EPS,
+        (act.v - 0.1).abs() < EPS && (act.omega + 1.0).abs() < EPS,
         "{act:?}"
     );
     // A veto of depth 2 arrives while robot 1 is within its rod (0.4 m): the head stops, and says so.

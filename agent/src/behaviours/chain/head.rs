@@ -4,11 +4,10 @@
 //! collision avoidance has the last word.
 //!
 //! Readings of the paper we chose:
-//! - FAR-RIGHT / FAR-LEFT trigger on *leaving* a wall (Table 2's wording): a reading in
-//!   `(wall_max, wall_range]`. A reading beyond `wall_range` is no wall, so in open space the
-//!   head keeps its course or seeks the target instead of circling in search of a wall.
-//! - FAR-LEFT: leaving the left wall but not leaving the right one (Table 2), so a head with
-//!   only a left wall still follows it (the text's "and above the right reading" would not).
+//! - FAR-RIGHT and FAR-LEFT trigger on any reading above `wall_max`, nothing seen included
+//!   (a wall that ends is one the head is leaving). FAR-LEFT: leaving the left wall but not
+//!   the right one (Table 2's wording; the text's "and above the right reading" is the same
+//!   whenever the right wall is still there).
 //! - CLOSE-LEFT: close to the left wall and not close to the right one, or closer to the left
 //!   when both are close (the text's optimisation of 2.6): in a corridor narrower than twice
 //!   `wall_min` the head turns away from the nearer wall instead of always to the left.
@@ -42,8 +41,10 @@ pub enum Layer {
     CloseLeft,
 }
 
-/// The two side readings of step 1: nearest obstacle at the left-front and right-front, in
-/// metres (the lidar's range when nothing is seen).
+/// The two side readings of step 1: nearest wall at the left-front and right-front, in
+/// metres (the lidar's range when nothing is seen). Robots are not walls: a head must neither
+/// follow its own chain curling beside it nor turn away from it (the chain follows the head
+/// and keeps its rods; it is not in the way).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sides {
     /// Left-front.
@@ -72,7 +73,7 @@ pub struct Wheels {
 
 /// The nearest lidar hit in the left-front sector `[from, to]` degrees and the right-front
 /// one `[-to, -from]`. Hits within `body` metres of a robot that range-and-bearing reports
-/// are that robot, not a wall: the head follows walls, not its own chain curling beside it.
+/// are that robot, not a wall.
 pub fn sides(obs: &Observation, lidar: &LidarConfig, sector_deg: [f64; 2], body: f64) -> Sides {
     let (from, to) = (sector_deg[0].to_radians(), sector_deg[1].to_radians());
     let mut s = Sides {
@@ -105,7 +106,7 @@ pub fn sides(obs: &Observation, lidar: &LidarConfig, sector_deg: [f64; 2], body:
 /// Table 2: the layer whose output drives the head and its wheel speeds.
 pub fn subsume(sides: Sides, target: Option<Target>, p: &ChainParams) -> (Layer, Wheels) {
     let s = p.speed;
-    let leaving = |d: f64| d > p.wall_max && d <= p.wall_range;
+    let leaving = |d: f64| d > p.wall_max;
     let close = |d: f64| d < p.wall_min;
     let mut out = (Layer::KeepMoving, Wheels { vl: s, vr: s });
     if let Some(t) = target {
@@ -129,16 +130,17 @@ pub fn subsume(sides: Sides, target: Option<Target>, p: &ChainParams) -> (Layer,
     }
     // Walls are followed to find the target; once it is in sight, leaving a wall is fine.
     let seeking = target.is_none();
-    if seeking && leaving(sides.right) {
+    let (left, right) = (sides.left, sides.right);
+    if seeking && leaving(right) {
         out = (Layer::FarRight, Wheels { vl: s, vr: 0.0 });
     }
-    if seeking && leaving(sides.left) && !leaving(sides.right) {
+    if seeking && leaving(left) && !leaving(right) {
         out = (Layer::FarLeft, Wheels { vl: 0.0, vr: s });
     }
-    if close(sides.right) {
+    if close(right) {
         out = (Layer::CloseRight, Wheels { vl: 0.0, vr: s });
     }
-    if close(sides.left) && (!close(sides.right) || sides.left < sides.right) {
+    if close(left) && (!close(right) || left < right) {
         out = (Layer::CloseLeft, Wheels { vl: s, vr: 0.0 });
     }
     out

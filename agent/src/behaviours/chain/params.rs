@@ -57,10 +57,6 @@ pub struct ChainParams {
     pub wall_min: f64,
     /// Maximum wall distance in metres (0.9 in the paper).
     pub wall_max: f64,
-    /// A side reading beyond this is no wall at all: FAR-RIGHT and FAR-LEFT trigger on
-    /// "leaving" a wall (Table 2), i.e. a reading in `(wall_max, wall_range]`, so in open
-    /// space the head keeps its course (or seeks the target) instead of circling.
-    pub wall_range: f64,
     /// The side sectors `[from, to]` in degrees off the heading: the left-front reading is
     /// the nearest lidar hit in `[from, to]`, the right-front one in `[-to, -from]`.
     pub side_sector_deg: [f64; 2],
@@ -103,7 +99,6 @@ impl Default for ChainParams {
             axle: 0.2,
             wall_min: 0.7,
             wall_max: 0.9,
-            wall_range: 1.5,
             side_sector_deg: [15.0, 90.0],
             target_gain: 1.0,
             stop_at_target: false,
@@ -160,7 +155,6 @@ impl Params for ChainParams {
         range_f("behaviour.axle", self.axle, 1e-4, 100.0)?;
         range_f("behaviour.wall_min", self.wall_min, 0.0, 1e3)?;
         range_f("behaviour.wall_max", self.wall_max, self.wall_min, 1e3)?;
-        range_f("behaviour.wall_range", self.wall_range, self.wall_max, 1e3)?;
         let [from, to] = self.side_sector_deg;
         range_f("behaviour.side_sector_deg[0]", from, 0.0, 180.0)?;
         range_f("behaviour.side_sector_deg[1]", to, from, 180.0)?;
