@@ -154,18 +154,7 @@ impl Config {
                     finite(&format!("robots.start.groups[{i}].heading_deg"), h)?;
                 }
                 if let Some([x, y]) = g.goal {
-                    let key = format!("robots.start.groups[{i}].goal");
-                    finite(&key, x)?;
-                    finite(&key, y)?;
-                    check(
-                        self.inside_bounds(x, y, 0.0),
-                        &key,
-                        &format!(
-                            "a point inside map.bounds, got [{}, {}]",
-                            short(x),
-                            short(y)
-                        ),
-                    )?;
+                    self.check_point(&format!("robots.start.groups[{i}].goal"), x, y)?;
                 }
             }
         }
@@ -262,6 +251,21 @@ impl Config {
         Ok(())
     }
 
+    /// `[x, y]` at `key` is a finite point inside the bounds.
+    fn check_point(&self, key: &str, x: f64, y: f64) -> Result<(), KeyError> {
+        finite(key, x)?;
+        finite(key, y)?;
+        check(
+            self.inside_bounds(x, y, 0.0),
+            key,
+            &format!(
+                "a point inside map.bounds, got [{}, {}]",
+                short(x),
+                short(y)
+            ),
+        )
+    }
+
     /// `robots.start.path`: alone (no grid centre, groups or scatter), at least two points
     /// inside the bounds, long enough for the chain, and no two robots overlapping on it.
     fn validate_path(&self) -> Result<(), KeyError> {
@@ -277,18 +281,7 @@ impl Config {
             &format!("at least two points [x, y], got {}", st.path.len()),
         )?;
         for (i, &[x, y]) in st.path.iter().enumerate() {
-            let key = format!("robots.start.path[{i}]");
-            finite(&key, x)?;
-            finite(&key, y)?;
-            check(
-                self.inside_bounds(x, y, 0.0),
-                &key,
-                &format!(
-                    "a point inside map.bounds, got [{}, {}]",
-                    short(x),
-                    short(y)
-                ),
-            )?;
+            self.check_point(&format!("robots.start.path[{i}]"), x, y)?;
         }
         let need = (self.robots.count.max(1) - 1) as f64 * st.spacing;
         let have = crate::layout::polyline_length(&st.path);

@@ -24,8 +24,9 @@ use super::rods::connector_angle;
 use crate::behaviour::{Series, SeriesPlot};
 
 /// The metrics [`metrics`] computes, as dotted paths into metrics.json.
-pub const NAMES: [&str; 12] = [
+pub const NAMES: [&str; 14] = [
     "chain.rod_violations",
+    "chain.rod_ticks",
     "chain.angle_violations",
     "chain.vetoes",
     "chain.veto_depth",
@@ -37,6 +38,7 @@ pub const NAMES: [&str; 12] = [
     "chain.collisions",
     "chain.reached",
     "chain.tail_reached",
+    "chain.tail_reached_tick",
 ];
 
 /// Metres off its start position at which a robot counts as moved.

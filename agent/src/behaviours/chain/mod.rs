@@ -63,6 +63,17 @@ use crate::inbox::Heard;
 /// Metres beyond the body a guiding line needs when the full `line_clearance` finds none.
 const TOUCH_MARGIN: f64 = 0.02;
 
+/// Where range-and-bearing sees robot `id` this tick, in the world frame.
+fn seen(obs: &Observation, id: u32) -> Option<P> {
+    obs.neighbours[..obs.neighbours_len as usize]
+        .iter()
+        .find(|n| n.id == id)
+        .map(|n| {
+            let a = obs.theta + n.bearing;
+            (obs.x + n.range * a.cos(), obs.y + n.range * a.sin())
+        })
+}
+
 /// What a robot last knew of one chain neighbour.
 #[derive(Debug, Clone, Copy, Default)]
 struct Known {
@@ -122,42 +133,23 @@ impl Chain {
 
     /// Where chain neighbour `id` is, by `master_from`.
     fn locate(&self, obs: &Observation, id: u32) -> Option<P> {
-        let seen = || {
-            obs.neighbours[..obs.neighbours_len as usize]
-                .iter()
-                .find(|n| n.id == id)
-                .map(|n| {
-                    let a = obs.theta + n.bearing;
-                    (obs.x + n.range * a.cos(), obs.y + n.range * a.sin())
-                })
-        };
-        let heard = || self.slot(id).and_then(|k| self.known[k].radio);
-        match self.p.master_from {
-            MasterFrom::Rab => seen(),
-            MasterFrom::Radio => heard(),
-            MasterFrom::Both => seen().or_else(heard),
-        }
+        let heard = self.slot(id).and_then(|k| self.known[k].radio);
+        self.by_master_from(seen(obs, id), heard)
     }
 
     /// Where the other neighbour of `master` is (the third corner of the connector angle at
     /// the master): range-and-bearing, else what the master said.
     fn third_corner(&self, obs: &Observation, master: u32) -> Option<P> {
-        let other = (2 * master as i64) - self.id as i64;
-        if other < 0 {
-            return None;
-        }
-        let seen = obs.neighbours[..obs.neighbours_len as usize]
-            .iter()
-            .find(|n| n.id as i64 == other)
-            .map(|n| {
-                let a = obs.theta + n.bearing;
-                (obs.x + n.range * a.cos(), obs.y + n.range * a.sin())
-            });
+        let other = u32::try_from(2 * master as i64 - self.id as i64).ok()?;
         let said = self.slot(master).and_then(|k| self.known[k].radio_master);
+        self.by_master_from(seen(obs, other), said)
+    }
+
+    fn by_master_from(&self, seen: Option<P>, heard: Option<P>) -> Option<P> {
         match self.p.master_from {
             MasterFrom::Rab => seen,
-            MasterFrom::Radio => said,
-            MasterFrom::Both => seen.or(said),
+            MasterFrom::Radio => heard,
+            MasterFrom::Both => seen.or(heard),
         }
     }
 
