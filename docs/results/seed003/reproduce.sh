@@ -38,12 +38,12 @@ python3 $out/table.py corridor=$corridor corridor_in_process=$corridor_ip \
 prop=()
 for how in rab radio; do
   for delay in 0 2; do
-    d=$(run "prop_${how}_${delay}" configs/chain_450.toml --in-process --ticks 800 \
+    d=$(run "prop_${how}_${delay}" configs/chain_450.toml --in-process --ticks 2500 \
       --set behaviour.master_from="\"$how\"" --set radio.delay_ticks=$delay)
-    prop+=("master_from=$how,delay=$delay=$d")
+    prop+=("master_from $how, delay $delay=$d")
   done
 done
-python3 $out/table.py "${prop[@]}" > $out/propagation.md
+python3 $out/wave.py "${prop[@]}" > $out/propagation.md
 
 # A middle robot (8) killed at tick 600 in the corridor: the chain splits.
 killed=$(run killed configs/chain_corridor.toml --set 'faults.kill=[{tick=600,robot=8}]' --ticks 3000)

@@ -24,6 +24,6 @@ COLS = [
 print("| run | " + " | ".join(c for c, _ in COLS) + " |")
 print("|---|" + "---:|" * len(COLS))
 for arg in sys.argv[1:]:
-    label, run = arg.split("=", 1)
+    label, run = arg.rsplit("=", 1)
     m = json.load(open(f"{run}/metrics.json"))
     print(f"| {label} | " + " | ".join(str(f(m)) for _, f in COLS) + " |")
