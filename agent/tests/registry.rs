@@ -88,7 +88,7 @@ fn defaults_are_filled_in_declaration_order_and_round_trip() {
 fn every_behaviour_is_listed_with_its_keys() {
     assert_eq!(
         registry::kinds(),
-        ["goto", "formation", "flocking", "grouping", "planner"]
+        ["goto", "formation", "flocking", "grouping", "planner", "chain"]
     );
     let keys = registry::param_keys();
     for k in [
@@ -98,6 +98,8 @@ fn every_behaviour_is_listed_with_its_keys() {
         "behaviour.migration_deg",
         "behaviour.cluster_distance",
         "behaviour.lead_time",
+        "behaviour.rod_max",
+        "behaviour.stationary",
     ] {
         assert!(keys.iter().any(|x| x == k), "{k} in {keys:?}");
     }
