@@ -88,7 +88,14 @@ fn defaults_are_filled_in_declaration_order_and_round_trip() {
 fn every_behaviour_is_listed_with_its_keys() {
     assert_eq!(
         registry::kinds(),
-        ["goto", "formation", "flocking", "grouping", "planner", "chain"]
+        [
+            "goto",
+            "formation",
+            "flocking",
+            "grouping",
+            "planner",
+            "chain"
+        ]
     );
     let keys = registry::param_keys();
     for k in [

@@ -253,11 +253,14 @@ fn a_frozen_process_is_really_stopped_and_a_restarted_one_really_new() {
         &dir,
         &[
             "--set",
-            "faults.freeze=[{robot=3,from=40,to=1000000}]",
+            "faults.freeze=[{robot=3,from=2000,to=1000000}]",
             "--set",
-            "faults.restart=[{tick=40,robot=1}]",
+            "faults.restart=[{tick=2000,robot=1}]",
         ],
     );
+    // The faults come ~1 s after the run is seen at tick 20 (it steps ~2,700 ticks/s), so
+    // the first process list below still holds robot 1's first incarnation even when this
+    // thread is slow to get there (at tick 40 a loaded machine lost that race).
     let first = children_of(child.id());
     let pid_of = |children: &[(i32, String)], robot: u32| {
         children
