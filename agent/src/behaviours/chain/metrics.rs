@@ -16,7 +16,7 @@
 //! - `collisions`, `reached`, and whether and when the tail reached the target.
 
 use serde_json::{Value, json};
-use swarmrt_protocol::records::Records;
+use swarmrt_protocol::records::{Records, Row};
 use swarmrt_scenario::Config;
 
 use super::params::ChainParams;
@@ -69,6 +69,20 @@ pub fn first_moves(run: &Records) -> FirstMoves {
     FirstMoves(out)
 }
 
+/// The length of every rod whose two robots are active at this tick.
+fn rods(rows: &[Row]) -> impl Iterator<Item = f64> + '_ {
+    rows.windows(2)
+        .filter(|w| w[0].active && w[1].active && w[1].id == w[0].id + 1)
+        .map(|w| (w[1].x - w[0].x).hypot(w[1].y - w[0].y))
+}
+
+/// The angle (radians) of every connector whose robot and two neighbours are active.
+fn angles(rows: &[Row]) -> impl Iterator<Item = f64> + '_ {
+    rows.windows(3)
+        .filter(|w| w.iter().all(|r| r.active) && w[2].id == w[0].id + 2)
+        .map(|w| connector_angle((w[0].x, w[0].y), (w[1].x, w[1].y), (w[2].x, w[2].y)))
+}
+
 /// The ends of the chain other than the initiator.
 fn ends(n: usize, initiator: usize) -> Vec<usize> {
     let mut e = vec![n - 1];
@@ -94,22 +108,16 @@ pub fn metrics(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<(&'static st
     let (mut longest, mut shortest) = (0.0f64, f64::INFINITY);
     let mut sharpest = f64::INFINITY;
     for rows in &run.ticks {
-        for w in rows.windows(2) {
-            if w[0].active && w[1].active && w[1].id == w[0].id + 1 {
-                let len = (w[1].x - w[0].x).hypot(w[1].y - w[0].y);
-                rod_ticks += 1;
-                rod_bad += u64::from(len < rod_lo || len > rod_hi);
-                longest = longest.max(len);
-                shortest = shortest.min(len);
-            }
+        for len in rods(rows) {
+            rod_ticks += 1;
+            rod_bad += u64::from(len < rod_lo || len > rod_hi);
+            longest = longest.max(len);
+            shortest = shortest.min(len);
         }
-        for w in rows.windows(3) {
-            if w.iter().all(|r| r.active) && w[2].id == w[0].id + 2 {
-                let a = connector_angle((w[0].x, w[0].y), (w[1].x, w[1].y), (w[2].x, w[2].y));
-                angle_ticks += 1;
-                angle_bad += u64::from(a < ang_lo || a > ang_hi);
-                sharpest = sharpest.min(a);
-            }
+        for a in angles(rows) {
+            angle_ticks += 1;
+            angle_bad += u64::from(a < ang_lo || a > ang_hi);
+            sharpest = sharpest.min(a);
         }
     }
     let (mut vetoes, mut depth, mut replans) = (0u64, 0u64, 0u64);
@@ -186,22 +194,9 @@ pub fn series(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<Series> {
     let dt = cfg.scenario.dt;
     let mut rows = Vec::new();
     for tick in &run.ticks {
-        let mut longest = f64::NAN;
-        let mut shortest = f64::NAN;
-        let mut sharpest = f64::NAN;
-        for w in tick.windows(2) {
-            if w[0].active && w[1].active && w[1].id == w[0].id + 1 {
-                let len = (w[1].x - w[0].x).hypot(w[1].y - w[0].y);
-                longest = longest.max(len);
-                shortest = shortest.min(len);
-            }
-        }
-        for w in tick.windows(3) {
-            if w.iter().all(|r| r.active) && w[2].id == w[0].id + 2 {
-                let a = connector_angle((w[0].x, w[0].y), (w[1].x, w[1].y), (w[2].x, w[2].y));
-                sharpest = sharpest.min(a.to_degrees());
-            }
-        }
+        let longest = rods(tick).fold(f64::NAN, f64::max);
+        let shortest = rods(tick).fold(f64::NAN, f64::min);
+        let sharpest = angles(tick).fold(f64::NAN, f64::min).to_degrees();
         let t = tick.first().map_or(0, |r| r.tick);
         rows.push(vec![
             t as f64,
