@@ -173,12 +173,10 @@ impl Chain {
         let ignore = 2.0 * self.radius + self.p.line_clearance;
         let me = (obs.x, obs.y);
         if line_blocked(&hits, to_robot_frame(pose, m), clearance, ignore) {
-            // The newest trail point in reach with the full clearance, else with a hair more
-            // than the body (where the master itself squeezed by); a trail point it already
-            // stands on is no way forward.
-            // Only the trail ahead of it counts: the points after the one nearest to it. When
-            // none is in a clear straight line, the next one: the master's body passed there,
-            // so the slave retraces its path exactly.
+            // Only the trail ahead of it counts (the points after the one nearest to it): the
+            // newest in a straight line with the full clearance, else with a hair more than
+            // the body (where the master itself squeezed by), else simply the next one (the
+            // master's body passed there, so the slave retraces its path).
             let tight = self.radius + TOUCH_MARGIN;
             let dist = |c: &P| (c.0 - me.0).hypot(c.1 - me.1);
             let nearest = (0..self.trail.len())
