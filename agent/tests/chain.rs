@@ -305,3 +305,27 @@ fn a_veto_that_reaches_the_head_stops_it_then_it_turns_in_place_and_goes_on() {
     head.step(&obs(0, 5, (3.0, 1.0), &[(1, 2.6, 1.0)]), &[], &mut act);
     assert!(act.v == 0.0 && act.omega > 0.0, "{act:?}");
 }
+
+#[test]
+fn a_link_with_a_position_no_robot_can_be_at_is_ignored() {
+    let cfg = config();
+    let mut act = Act::default();
+    let mut slave = brain(&cfg, 1);
+    // Its master 0 is out of range-and-bearing sight; the radio says it is at NaN.
+    let heard = [Heard {
+        src: 0,
+        sent_tick: 1,
+        msg: link(f64::NAN, 1.0, 0),
+    }];
+    slave.step(&obs(1, 2, (2.55, 1.0), &[]), &heard, &mut act);
+    assert_eq!((act.v, act.omega), (0.0, 0.0), "no master known: it stays");
+    // A sane one is followed.
+    act.reset();
+    let heard = [Heard {
+        src: 0,
+        sent_tick: 2,
+        msg: link(3.2, 1.0, 0),
+    }];
+    slave.step(&obs(1, 3, (2.55, 1.0), &[]), &heard, &mut act);
+    assert!(act.v > 0.0 && act.v.is_finite(), "{act:?}");
+}

@@ -392,6 +392,10 @@ impl Behaviour for Chain {
         for h in inbox {
             let Some(k) = self.slot(h.src) else { continue };
             let msg = &h.msg;
+            let finite = |[x, y]: [f32; 2]| x.is_finite() && y.is_finite();
+            if !finite([msg.x, msg.y]) || !msg.master.is_none_or(finite) {
+                continue; // a position no robot can be at: not worth following
+            }
             self.known[k] = Known {
                 radio: Some((msg.x as f64, msg.y as f64)),
                 radio_master: msg.master.map(|[x, y]| (x as f64, y as f64)),
