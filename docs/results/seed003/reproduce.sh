@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates every number and figure of docs/results/seed003.md (about 15 minutes on 2
+# Regenerates every number and figure of docs/results/seed003.md (about 10 minutes on 2
 # cores, most of it the loss-and-delay sweep and the 451-process runs).
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
