@@ -111,6 +111,8 @@ pub struct Chain {
     master_prev: Option<P>,
     /// The master's trail, oldest first (Push-Pull-Rotate).
     trail: VecDeque<P>,
+    /// This tick's lidar hits in the robot frame (a kept buffer).
+    hits: Vec<P>,
     /// Ticks in a row without a collision-free guiding line.
     trapped: u32,
     veto_in: Option<VetoIn>,
@@ -153,26 +155,28 @@ impl Chain {
         }
     }
 
-    /// The lidar's hits in the robot frame (rays that hit something before their range).
-    fn hits(&self, obs: &Observation) -> Vec<P> {
-        (0..obs.lidar_len as usize)
-            .filter(|&k| obs.lidar[k] < self.lidar.range - 1e-9)
-            .map(|k| {
+    /// Fills `self.hits` with the lidar's hits in the robot frame (rays that hit something
+    /// before their range); the buffer is kept, so a tick allocates nothing.
+    fn sense_hits(&mut self, obs: &Observation) {
+        self.hits.clear();
+        for k in 0..obs.lidar_len as usize {
+            if obs.lidar[k] < self.lidar.range - 1e-9 {
                 let a = self.lidar.ray_angle(k);
-                (obs.lidar[k] * a.cos(), obs.lidar[k] * a.sin())
-            })
-            .collect()
+                self.hits.push((obs.lidar[k] * a.cos(), obs.lidar[k] * a.sin()));
+            }
+        }
     }
 
     /// Appendix A's `Adaptation` of this robot to `master` at `m`, with Push-Pull-Rotate:
     /// the target point, or `None` when no collision-free guiding line exists (trapped).
     fn adaptation(&mut self, obs: &Observation, master: u32, m: P, lead: f64) -> Option<P> {
         let pose = (obs.x, obs.y, obs.theta);
-        let hits = self.hits(obs);
+        self.sense_hits(obs);
+        let hits = &self.hits;
         let clearance = self.radius + self.p.line_clearance;
         let ignore = 2.0 * self.radius + self.p.line_clearance;
         let me = (obs.x, obs.y);
-        if line_blocked(&hits, to_robot_frame(pose, m), clearance, ignore) {
+        if line_blocked(hits, to_robot_frame(pose, m), clearance, ignore) {
             // Only the trail ahead of it counts (the points after the one nearest to it): the
             // newest in a straight line with the full clearance, else with a hair more than
             // the body (where the master itself squeezed by), else simply the next one (the
@@ -185,7 +189,7 @@ impl Chain {
             let ahead = || self.trail.range(nearest + 1..).copied();
             return [clearance, tight]
                 .into_iter()
-                .find_map(|c| rotate_towards(pose, ahead(), &hits, c))
+                .find_map(|c| rotate_towards(pose, ahead(), hits, c))
                 .or_else(|| ahead().next());
         }
         let (_, mut target) = adapt(m, me, self.p.rod_min, self.p.rod_max, lead);
@@ -197,7 +201,7 @@ impl Chain {
                 self.p.angle_min_deg.to_radians(),
                 self.p.angle_max_deg.to_radians(),
             );
-            if !line_blocked(&hits, to_robot_frame(pose, clamped), clearance, ignore) {
+            if !line_blocked(hits, to_robot_frame(pose, clamped), clearance, ignore) {
                 target = clamped;
             }
         }
@@ -376,6 +380,7 @@ impl Behaviour for Chain {
             known: [Known::default(); 3],
             master_prev: None,
             trail: VecDeque::new(),
+            hits: Vec::new(),
             trapped: 0,
             veto_in: None,
             vetoing: 0,
