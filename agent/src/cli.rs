@@ -24,6 +24,10 @@ struct Args {
     /// `consensus.storage` on).
     #[arg(long)]
     storage: Option<std::path::PathBuf>,
+    /// The id of the first robot in this host's observation sample: a host running robots
+    /// 40..80 of a run publishes only their 40 slots, so robot 45 reads slot 5.
+    #[arg(long, default_value_t = 0)]
+    slot_offset: u32,
 }
 
 /// Entry point of the process (the `swarm-agent` binary in the orchestrator package).
@@ -45,8 +49,12 @@ pub fn main() -> std::process::ExitCode {
         tracing::error!("{e}");
         return std::process::ExitCode::from(2);
     }
-    if args.robot >= cfg.robots.count {
-        tracing::error!(robots = cfg.robots.count, "robot id out of range");
+    if args.robot >= cfg.robots.count || args.slot_offset > args.robot {
+        tracing::error!(
+            robots = cfg.robots.count,
+            slot_offset = args.slot_offset,
+            "robot id out of range"
+        );
         return std::process::ExitCode::from(2);
     }
     match shell::run(
@@ -55,6 +63,7 @@ pub fn main() -> std::process::ExitCode {
         args.robot,
         args.incarnation,
         args.storage.as_deref(),
+        args.slot_offset,
     ) {
         // Exit code 0 means exactly "the world ended the run", so the orchestrator can tell a
         // clean end from a robot that vanished mid-run.

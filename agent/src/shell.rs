@@ -80,13 +80,15 @@ pub enum Exit {
 /// `incarnation` is 0 for the first process of the robot and counts scheduled restarts.
 /// `storage` is the run's stable-storage directory: with `consensus.storage` on, the robot
 /// restores its persistent Raft state from it and writes that state there before each
-/// command leaves (write-ahead).
+/// command leaves (write-ahead). `slot_offset` is the id of the first robot in the
+/// observation sample (0 beside the world; a remote host's first robot otherwise).
 pub fn run(
     run: &RunServices,
     cfg: &Config,
     id: u32,
     incarnation: u32,
     storage: Option<&std::path::Path>,
+    slot_offset: u32,
 ) -> Result<Exit, IpcError> {
     let node = ipc::node(run, &run.robot_node_name(id))?;
     let ports = ipc::RobotPorts::open(&node, run)?;
@@ -134,7 +136,7 @@ pub fn run(
             if header.shutdown != 0 {
                 return Ok(Exit::Shutdown);
             }
-            let Some(obs) = sample.payload().get(id as usize) else {
+            let Some(obs) = sample.payload().get((id - slot_offset) as usize) else {
                 return Err(format!("observation sample has no slot for robot {id}").into());
             };
             // Ticks in which this robot is frozen or restarting (a thawed or fresh process

@@ -64,6 +64,9 @@ pub struct RunArgs {
     /// Override any config key, e.g. --set radio.loss=0.2 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    /// Run the robots a hosts file names on other hosts, over Zenoh (docs/multihost.md).
+    #[arg(long, value_name = "HOSTS.TOML", conflicts_with = "in_process")]
+    pub hosts: Option<PathBuf>,
 }
 
 /// `swarm check`.
@@ -74,6 +77,9 @@ pub struct CheckArgs {
     /// Override any config key (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    /// Also check a hosts file against the config and print which host runs which robots.
+    #[arg(long, value_name = "HOSTS.TOML")]
+    pub hosts: Option<PathBuf>,
 }
 
 /// `swarm plan`.

@@ -2,11 +2,12 @@
 //! writes run directories. Also runs the same cores in-process.
 #![warn(missing_docs)]
 
-pub mod cleanup;
+pub use swarmrt_protocol::cleanup;
 pub mod cli;
 pub mod commands;
 pub mod config;
 pub mod error;
+pub mod hosts;
 pub mod processes;
 pub mod run_dir;
 pub mod sweep;

@@ -8,18 +8,19 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{BufRead, BufReader, Write};
-use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
-use std::process::{ChildStdin, Command, Stdio};
+use std::process::{ChildStdin, Stdio};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use crossbeam_channel::{Receiver, Sender};
-use swarmrt_protocol::control::{Control, WorldReport};
+use swarmrt_protocol::control::{Control, HostControl, HostReport, WorldReport};
 use swarmrt_protocol::services::RunServices;
 use swarmrt_scenario::Config;
 
-use crate::cleanup;
+use crate::hosts::{HostMsg, Remotes, RunHosts};
+use swarmrt_protocol::cleanup;
+pub use swarmrt_scenario::process::{child_command, describe, signal_all};
 
 /// How long robots get to exit on the world's shutdown sample before they are sent SIGTERM
 /// (a robot that subscribed after that sample never sees it). The wait ends as soon as all
@@ -50,6 +51,8 @@ pub struct ProcessOutcome {
     pub run_id: String,
     /// Every robot process started, in start order, with how it ended.
     pub processes: Vec<RobotProcess>,
+    /// Each remote host's counters (`--hosts` runs).
+    pub hosts: Option<serde_json::Value>,
 }
 
 /// One robot process of a run (`metrics.json` → `processes`).
@@ -65,10 +68,14 @@ pub struct RobotProcess {
     pub end: String,
     /// True when the fault schedule killed it (a kill or a restart).
     pub scheduled_kill: bool,
+    /// The remote host it ran on (`--hosts` runs; its pid is that host's).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub host: Option<String>,
 }
 
 enum Msg {
     Report(WorldReport),
+    Host(usize, HostMsg),
     WorldEof,
     Exited { pid: i32, how: String },
     Interrupt,
@@ -100,41 +107,6 @@ pub fn sibling_binary(name: &str) -> anyhow::Result<PathBuf> {
         "cannot find {name} beside {}; build the whole workspace (cargo build --release)",
         exe.display()
     )
-}
-
-/// A command for a child of this orchestrator: its own process group, SIGTERM if the
-/// spawning thread dies. The spawning thread must outlive the child (`PR_SET_PDEATHSIG` follows
-/// the thread, not the process).
-pub fn child_command(bin: &Path) -> Command {
-    let mut cmd = Command::new(bin);
-    // Own process group: a terminal's Ctrl-C reaches only the orchestrator, which then stops
-    // the run in order. If the orchestrator dies, the child gets SIGTERM and exits cleanly.
-    cmd.process_group(0);
-    let parent = std::process::id() as libc::pid_t;
-    unsafe {
-        cmd.pre_exec(move || {
-            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            // The orchestrator may have died between fork and prctl; then no signal will
-            // ever come. Only async-signal-safe calls here (the parent has threads).
-            if libc::getppid() != parent {
-                libc::_exit(1);
-            }
-            Ok(())
-        });
-    }
-    cmd
-}
-
-fn describe(status: i32) -> String {
-    if libc::WIFSIGNALED(status) {
-        format!("killed by signal {}", libc::WTERMSIG(status))
-    } else if libc::WIFEXITED(status) {
-        format!("exited with code {}", libc::WEXITSTATUS(status))
-    } else {
-        format!("ended with status {status}")
-    }
 }
 
 /// Reaps one child: a small thread blocked in `waitpid(pid)`, so iceoryx2 never sees a zombie
@@ -199,27 +171,30 @@ fn send_control(stdin: &mut Option<ChildStdin>, c: &Control) {
     }
 }
 
-fn signal_all(pids: &[i32], sig: i32) {
-    for &p in pids {
-        // SAFETY: kill(2) on pids we spawned and have not reaped (so not reused).
-        unsafe {
-            libc::kill(p, sig);
-        }
-    }
-}
-
 /// Runs `cfg` as processes; records go to `dir`. `progress` sees completed ticks.
 pub fn run(
     cfg: &Config,
     config_path: &Path,
     dir: &Path,
     interrupt: Receiver<()>,
+    progress: impl FnMut(u64),
+) -> anyhow::Result<ProcessOutcome> {
+    run_on_hosts(cfg, config_path, dir, None, interrupt, progress)
+}
+
+/// [`run`], with the robots `hosts` names on other hosts (`swarm run --hosts`).
+pub fn run_on_hosts(
+    cfg: &Config,
+    config_path: &Path,
+    dir: &Path,
+    hosts: Option<&RunHosts>,
+    interrupt: Receiver<()>,
     mut progress: impl FnMut(u64),
 ) -> anyhow::Result<ProcessOutcome> {
     let run_id = new_run_id();
     let run = RunServices::new(&run_id);
     cleanup::claim(&run_id).context("cannot create the run's iceoryx2 directory")?;
-    let result = supervise(cfg, config_path, dir, &run, interrupt, &mut progress);
+    let result = supervise(cfg, config_path, dir, hosts, &run, interrupt, &mut progress);
     let removed = cleanup::remove_run(&run_id);
     tracing::debug!(run_id, removed, "run resources removed");
     result.map(|mut o| {
@@ -232,6 +207,7 @@ fn supervise(
     cfg: &Config,
     config_path: &Path,
     dir: &Path,
+    hosts: Option<&RunHosts>,
     run: &RunServices,
     interrupt: Receiver<()>,
     progress: &mut impl FnMut(u64),
@@ -267,11 +243,16 @@ fn supervise(
         });
     }
 
-    let mut world = child_command(&world_bin)
+    let mut world_cmd = child_command(&world_bin);
+    world_cmd
         .args(["--run-id", run.run_id(), "--config"])
         .arg(config_path)
         .arg("--out")
-        .arg(dir)
+        .arg(dir);
+    if let Some(h) = hosts {
+        world_cmd.arg("--hosts").arg(&h.path);
+    }
+    let mut world = world_cmd
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .spawn()
@@ -315,15 +296,43 @@ fn supervise(
                     "the world process failed before the run started ({how}); see its error above"
                 )
             }
-            Msg::Exited { .. } => {}
+            Msg::Exited { .. } | Msg::Host(..) => {}
             Msg::Interrupt => {
                 signal_all(&[world_pid], libc::SIGTERM);
                 outcome.interrupted = true;
-                wait_for_exit(&rx, &[world_pid], &mut BTreeMap::new(), Duration::ZERO);
+                wait_for_exit(
+                    &rx,
+                    &[world_pid],
+                    &mut BTreeMap::new(),
+                    Duration::ZERO,
+                    |_| {},
+                );
                 return Ok(outcome);
             }
         }
     }
+    // Remote hosts start now too: the world's Zenoh session is listening.
+    let mut remotes = match hosts {
+        None => None,
+        Some(h) => {
+            match Remotes::launch(&h.file, run.run_id(), config_path, &tx, Msg::Host, |pid| {
+                reap(pid, tx.clone())
+            }) {
+                Ok(r) => Some(r),
+                Err(e) => {
+                    send_control(&mut world_stdin, &Control::Stop);
+                    wait_for_exit(
+                        &rx,
+                        &[world_pid],
+                        &mut BTreeMap::new(),
+                        SHUTDOWN_GRACE,
+                        |_| {},
+                    );
+                    return Err(e);
+                }
+            }
+        }
+    };
     // Stable storage of the robots' persistent Raft state, for restarts (`consensus.storage`).
     let storage = dir.join(crate::run_dir::STORAGE_DIR);
     let spawn_robot = |id: u32, incarnation: u32| {
@@ -349,6 +358,9 @@ fn supervise(
     let mut started: Vec<(i32, u32, u32)> = Vec::new();
     let mut ended: BTreeMap<i32, String> = BTreeMap::new();
     for id in 0..n {
+        if remotes.as_ref().is_some_and(|r| r.host_of(id).is_some()) {
+            continue;
+        }
         if interrupted_flag.load(std::sync::atomic::Ordering::SeqCst) {
             // Ctrl-C during start-up: start no more robots; the main loop stops the world.
             break;
@@ -385,9 +397,33 @@ fn supervise(
     let mut scheduled_kills: BTreeSet<i32> = BTreeSet::new();
     // Processes the fault schedule stopped; they get SIGCONT before any shutdown.
     let mut frozen: BTreeSet<i32> = BTreeSet::new();
+    // Remote robot processes: (host, pid) -> (robot, incarnation), and how each ended.
+    let mut remote_started: Vec<(usize, i32, u32, u32)> = Vec::new();
+    let mut remote_ended: BTreeMap<(usize, i32), (String, bool)> = BTreeMap::new();
+    let mut ready = false;
+    // A host that failed before tick 0 fails the run.
+    let mut startup_failure: Option<crate::hosts::HostFailure> = None;
     while !done {
-        match rx.recv()? {
-            Msg::Report(WorldReport::Ready { startup_ms }) => outcome.startup_ms = Some(startup_ms),
+        let msg = rx.recv()?;
+        // A fault or a death of a robot on a remote host: ordered through its swarm-host.
+        if let (Some(r), Msg::Report(report)) = (remotes.as_mut(), &msg)
+            && let Some((robot, order)) = remote_order(report)
+            && let Some(host) = r.host_of(robot)
+        {
+            if let WorldReport::Unresponsive { waited_ms, .. } = report {
+                outcome.unscheduled_deaths.insert(
+                    robot,
+                    format!("unresponsive for {waited_ms} ms (on host {})", r.name(host)),
+                );
+            }
+            r.order(host, &order);
+            continue;
+        }
+        match msg {
+            Msg::Report(WorldReport::Ready { startup_ms }) => {
+                ready = true;
+                outcome.startup_ms = Some(startup_ms);
+            }
             Msg::Report(WorldReport::Tick { tick }) => progress(tick),
             Msg::Report(WorldReport::Kill { robot }) => {
                 // A scheduled kill: the world counts the robot dead already; the real signal
@@ -456,6 +492,23 @@ fn supervise(
             }
             Msg::Report(WorldReport::Listening) => {}
             Msg::WorldEof => world_eof = true,
+            Msg::Exited { pid, how }
+                if remotes.as_ref().is_some_and(|r| r.by_pid(pid).is_some()) =>
+            {
+                let r = remotes.as_mut().expect("checked");
+                let host = r.by_pid(pid).expect("checked");
+                if let Some(why) = r.ended(host, &how) {
+                    lose_host(
+                        r,
+                        host,
+                        &why,
+                        ready,
+                        &mut startup_failure,
+                        &mut outcome,
+                        &mut world_stdin,
+                    );
+                }
+            }
             Msg::Exited { pid, how } => {
                 if pid == world_pid {
                     world_alive = false;
@@ -484,6 +537,63 @@ fn supervise(
                     }
                 }
             }
+            Msg::Host(host, HostMsg::Report(report)) => {
+                let Some(r) = remotes.as_mut() else { continue };
+                r.note(host, &report);
+                match report {
+                    HostReport::Started {
+                        robot,
+                        incarnation,
+                        pid,
+                    } => remote_started.push((host, pid, robot, incarnation)),
+                    HostReport::Exited {
+                        robot,
+                        pid,
+                        how,
+                        ordered,
+                    } => {
+                        remote_ended.insert((host, pid), (how.clone(), ordered));
+                        if ordered {
+                            send_control(&mut world_stdin, &Control::Reaped { robot });
+                        } else {
+                            if how != CLEAN_EXIT {
+                                tracing::warn!(robot, host = r.name(host), "robot process {how}");
+                                outcome.unscheduled_deaths.insert(robot, how.clone());
+                            }
+                            send_control(
+                                &mut world_stdin,
+                                &Control::RobotDied {
+                                    robot,
+                                    reason: format!("process {how}"),
+                                },
+                            );
+                        }
+                    }
+                    HostReport::Failed { .. } => {
+                        if let Some(why) = r.lost(host).map(str::to_string) {
+                            lose_host(
+                                r,
+                                host,
+                                &why,
+                                ready,
+                                &mut startup_failure,
+                                &mut outcome,
+                                &mut world_stdin,
+                            );
+                        }
+                    }
+                    HostReport::Joined | HostReport::Done { .. } => {}
+                }
+            }
+            Msg::Host(_, HostMsg::Eof) => {}
+            Msg::Report(WorldReport::HostLost { host, robots }) => {
+                for robot in robots {
+                    outcome
+                        .unscheduled_deaths
+                        .entry(robot)
+                        .or_insert_with(|| format!("host {host} lost"));
+                }
+            }
             Msg::Interrupt => {
                 interrupts += 1;
                 outcome.interrupted = true;
@@ -497,6 +607,14 @@ fn supervise(
                     frozen.clear();
                 }
             }
+        }
+        if startup_failure.is_some() && !done {
+            // Stop the world and the other hosts; the error is returned below.
+            send_control(&mut world_stdin, &Control::Stop);
+            if let Some(r) = remotes.as_mut() {
+                r.stop_all();
+            }
+            done = true;
         }
         if !done
             && world_eof
@@ -521,7 +639,42 @@ fn supervise(
     } else {
         Duration::ZERO
     };
-    wait_for_exit(&rx, &remaining, &mut ended, grace);
+    if let Some(r) = remotes.as_ref() {
+        // Each host sees its robots out after the world's shutdown, then exits.
+        remaining.extend(r.pids().into_iter().filter(|p| !ended.contains_key(p)));
+    }
+    let mut launcher_ends: BTreeMap<i32, String> = BTreeMap::new();
+    wait_for_exit(&rx, &remaining, &mut ended, grace, |m| {
+        if let (Msg::Host(host, HostMsg::Report(report)), Some(r)) = (m, remotes.as_mut()) {
+            r.note(host, &report);
+            match report {
+                HostReport::Started {
+                    robot,
+                    incarnation,
+                    pid,
+                } => remote_started.push((host, pid, robot, incarnation)),
+                HostReport::Exited {
+                    pid, how, ordered, ..
+                } => {
+                    remote_ended.insert((host, pid), (how, ordered));
+                }
+                _ => {}
+            }
+        }
+    });
+    if let Some(r) = remotes.as_ref() {
+        for pid in r.pids() {
+            if let Some(how) = ended.remove(&pid) {
+                launcher_ends.insert(pid, how);
+            }
+        }
+        let unclean = r.clean(run.run_id());
+        if !unclean.is_empty() {
+            tracing::warn!(?unclean, "hosts whose resources could not be removed");
+        }
+        outcome.hosts = Some(r.stats());
+    }
+    tracing::debug!(?launcher_ends, "hosts ended");
     outcome.processes = started
         .into_iter()
         .map(|(pid, robot, incarnation)| RobotProcess {
@@ -532,8 +685,27 @@ fn supervise(
                 .remove(&pid)
                 .unwrap_or_else(|| "not reaped".to_string()),
             scheduled_kill: scheduled_kills.contains(&pid),
+            host: None,
         })
         .collect();
+    if let Some(r) = remotes.as_ref() {
+        for (host, pid, robot, incarnation) in remote_started {
+            let (end, ordered) = remote_ended
+                .remove(&(host, pid))
+                .unwrap_or_else(|| ("not reaped".to_string(), false));
+            outcome.processes.push(RobotProcess {
+                robot,
+                incarnation,
+                pid,
+                end,
+                scheduled_kill: ordered && !outcome.unscheduled_deaths.contains_key(&robot),
+                host: Some(r.name(host).to_string()),
+            });
+        }
+    }
+    if let Some(f) = startup_failure {
+        return Err(f.into());
+    }
     Ok(outcome)
 }
 
@@ -545,6 +717,7 @@ fn wait_for_exit(
     pids: &[i32],
     ended: &mut BTreeMap<i32, String>,
     grace: Duration,
+    mut other: impl FnMut(Msg),
 ) {
     let mut left: std::collections::BTreeSet<i32> = pids.iter().copied().collect();
     let mut stage = 0; // 0: waiting, 1: SIGTERM sent, 2: SIGKILL sent
@@ -562,7 +735,7 @@ fn wait_for_exit(
                 stage = 2;
                 deadline = Instant::now() + EXIT_GRACE;
             }
-            Ok(_) => {}
+            Ok(m) => other(m),
             Err(crossbeam_channel::RecvTimeoutError::Timeout) if stage == 0 => {
                 tracing::debug!(
                     count = left.len(),
@@ -588,5 +761,48 @@ fn wait_for_exit(
                 return;
             }
         }
+    }
+}
+
+/// The order for a remote robot's swarm-host that a world report asks for, if any.
+fn remote_order(r: &WorldReport) -> Option<(u32, HostControl)> {
+    Some(match *r {
+        WorldReport::Kill { robot } => (robot, HostControl::Kill { robot }),
+        WorldReport::Freeze { robot } => (robot, HostControl::Freeze { robot }),
+        WorldReport::Thaw { robot } => (robot, HostControl::Thaw { robot }),
+        WorldReport::Restart { robot, incarnation } => {
+            (robot, HostControl::Restart { robot, incarnation })
+        }
+        WorldReport::Unresponsive { robot, .. } => (robot, HostControl::Kill { robot }),
+        _ => return None,
+    })
+}
+
+/// A host is gone (`why`): before tick 0 that fails the run; afterwards its robots are dead
+/// from now on, an unscheduled death each.
+fn lose_host(
+    r: &mut Remotes,
+    host: usize,
+    why: &str,
+    ready: bool,
+    startup_failure: &mut Option<crate::hosts::HostFailure>,
+    outcome: &mut ProcessOutcome,
+    world_stdin: &mut Option<ChildStdin>,
+) {
+    if !ready {
+        startup_failure.get_or_insert(crate::hosts::HostFailure {
+            host: r.name(host).to_string(),
+            why: why.to_string(),
+        });
+        return;
+    }
+    tracing::warn!(host = r.name(host), "host lost: {why}");
+    for robot in r.robots(host) {
+        let reason = format!("host {} lost: {why}", r.name(host));
+        outcome
+            .unscheduled_deaths
+            .entry(robot)
+            .or_insert(reason.clone());
+        send_control(world_stdin, &Control::RobotDied { robot, reason });
     }
 }

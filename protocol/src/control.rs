@@ -69,6 +69,14 @@ pub enum WorldReport {
         /// How long the world waited, ms.
         waited_ms: u64,
     },
+    /// A remote host's link is gone (its `swarm-host` died or its link was cut): the world
+    /// marked its robots dead at this tick. Unscheduled: the run is no longer reproducible.
+    HostLost {
+        /// The host's name.
+        host: String,
+        /// Its robots the world marked dead.
+        robots: Vec<u32>,
+    },
     /// Progress, sent at most a few times a second.
     Tick {
         /// The tick just completed.
@@ -96,6 +104,99 @@ impl Control {
     /// One line, newline-terminated.
     pub fn to_line(&self) -> String {
         let mut s = serde_json::to_string(self).expect("controls always serialize");
+        s.push('\n');
+        s
+    }
+}
+
+/// Orchestrator -> `swarm-host` (its stdin, through the host's launcher): the run's config
+/// first, then the faults of the host's robots, as the world reported them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "control", rename_all = "snake_case")]
+pub enum HostControl {
+    /// The resolved config of the run (the first line; a remote host cannot read the run
+    /// directory).
+    Config {
+        /// The config as TOML.
+        toml: String,
+    },
+    /// SIGKILL the robot's process (a scheduled kill, or an unresponsive robot).
+    Kill {
+        /// The robot.
+        robot: u32,
+    },
+    /// SIGSTOP the robot's process.
+    Freeze {
+        /// The robot.
+        robot: u32,
+    },
+    /// SIGCONT the robot's process.
+    Thaw {
+        /// The robot.
+        robot: u32,
+    },
+    /// SIGKILL the robot's process and start a fresh one.
+    Restart {
+        /// The robot.
+        robot: u32,
+        /// The fresh process's incarnation.
+        incarnation: u32,
+    },
+    /// End now: robots are told to exit, then the host cleans up and exits.
+    Stop,
+}
+
+/// `swarm-host` -> orchestrator (its stdout, through the launcher).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "report", rename_all = "snake_case")]
+pub enum HostReport {
+    /// The world accepted the host; its robots are starting.
+    Joined,
+    /// A robot process started.
+    Started {
+        /// The robot.
+        robot: u32,
+        /// 0, then one more per restart.
+        incarnation: u32,
+        /// Its pid on that host.
+        pid: i32,
+    },
+    /// A robot process ended.
+    Exited {
+        /// The robot.
+        robot: u32,
+        /// Its pid on that host.
+        pid: i32,
+        /// How it ended ("exited with code 0" after the world's shutdown).
+        how: String,
+        /// True when the host killed it on the orchestrator's order (kill, restart).
+        ordered: bool,
+    },
+    /// The host is done and has removed its iceoryx2 resources.
+    Done {
+        /// The host's counters (JSON object).
+        stats: serde_json::Value,
+    },
+    /// The host failed and is exiting; one line saying why.
+    Failed {
+        /// What failed.
+        why: String,
+    },
+}
+
+impl HostControl {
+    /// One line, newline-terminated.
+    pub fn to_line(&self) -> String {
+        let mut s = serde_json::to_string(self).expect("controls always serialize");
+        s.push('\n');
+        s
+    }
+}
+
+impl HostReport {
+    /// One line, newline-terminated.
+    pub fn to_line(&self) -> String {
+        let mut s = serde_json::to_string(self).expect("reports always serialize");
         s.push('\n');
         s
     }

@@ -22,6 +22,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod cleanup;
 pub mod control;
 pub mod ipc;
 pub mod messages;

@@ -1,7 +1,9 @@
 //! What every child process (world, robot, benchmark child) does before its loop: set up
 //! logging, check the run id it was given and load the resolved config the orchestrator wrote.
 
+use std::os::unix::process::CommandExt;
 use std::path::Path;
+use std::process::Command;
 
 use swarmrt_protocol::services::{RunServices, valid_run_id};
 
@@ -30,6 +32,52 @@ pub fn init_logging() {
         )
         .with_writer(std::io::stderr)
         .init();
+}
+
+/// A command for a child process (of the orchestrator, or of `swarm-host`): its own
+/// process group, SIGTERM if the spawning thread dies. The spawning thread must outlive the child (`PR_SET_PDEATHSIG` follows
+/// the thread, not the process).
+pub fn child_command(bin: &Path) -> Command {
+    let mut cmd = Command::new(bin);
+    // Own process group: a terminal's Ctrl-C reaches only the orchestrator, which then stops
+    // the run in order. If the orchestrator dies, the child gets SIGTERM and exits cleanly.
+    cmd.process_group(0);
+    let parent = std::process::id() as libc::pid_t;
+    unsafe {
+        cmd.pre_exec(move || {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            // The orchestrator may have died between fork and prctl; then no signal will
+            // ever come. Only async-signal-safe calls here (the parent has threads).
+            if libc::getppid() != parent {
+                libc::_exit(1);
+            }
+            Ok(())
+        });
+    }
+    cmd
+}
+
+/// How a `waitpid` status ended, in words ("exited with code 0", "killed by signal 9").
+pub fn describe(status: i32) -> String {
+    if libc::WIFSIGNALED(status) {
+        format!("killed by signal {}", libc::WTERMSIG(status))
+    } else if libc::WIFEXITED(status) {
+        format!("exited with code {}", libc::WEXITSTATUS(status))
+    } else {
+        format!("ended with status {status}")
+    }
+}
+
+/// Sends `sig` to every pid (children spawned and not yet reaped, so never reused).
+pub fn signal_all(pids: &[i32], sig: i32) {
+    for &p in pids {
+        // SAFETY: kill(2) on pids the caller spawned and have not reaped (so not reused).
+        unsafe {
+            libc::kill(p, sig);
+        }
+    }
 }
 
 #[cfg(test)]

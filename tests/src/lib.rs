@@ -2,6 +2,8 @@
 //! `swarm` with a watchdog, and reads run directories.
 #![warn(missing_docs)]
 
+pub mod lab;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;

@@ -17,6 +17,9 @@ struct Args {
     /// The run directory to write trajectory.csv and events.jsonl into.
     #[arg(long)]
     out: std::path::PathBuf,
+    /// The run's hosts.toml: the robots it names run on other hosts, reached over Zenoh.
+    #[arg(long)]
+    hosts: Option<std::path::PathBuf>,
 }
 
 /// Entry point of the process (the `swarm-world` binary in the orchestrator package).
@@ -35,7 +38,26 @@ pub fn main(vocabulary: swarmrt_protocol::Vocabulary) -> std::process::ExitCode 
             return std::process::ExitCode::from(2);
         }
     };
-    match shell::run(&run, &cfg, &args.out, vocabulary) {
+    let hosts = match &args.hosts {
+        None => None,
+        Some(path) => {
+            let file = swarmrt_hosts::HostsFile::load(path, cfg.robots.count);
+            let text = std::fs::read_to_string(&args.config);
+            match (file, text) {
+                (Ok(f), Ok(t)) => Some((f, swarmrt_hosts::link::layout(&t))),
+                (Err(e), _) => {
+                    tracing::error!("{e}");
+                    return std::process::ExitCode::from(2);
+                }
+                (_, Err(e)) => {
+                    tracing::error!("{}: {e}", args.config.display());
+                    return std::process::ExitCode::from(2);
+                }
+            }
+        }
+    };
+    let hosts = hosts.as_ref().map(|(f, l)| (f, *l));
+    match shell::run(&run, &cfg, &args.out, vocabulary, hosts) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             tracing::error!("world failed: {e}");

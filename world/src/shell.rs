@@ -12,6 +12,9 @@ use iceoryx2::identifiers::UniquePublisherId;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
+use swarmrt_hosts::HostsFile;
+use swarmrt_hosts::wire::{Down, Up};
+use swarmrt_hosts::world_side::{Heard, HostTraffic, WorldLink};
 use swarmrt_protocol::control::{Control, WorldReport};
 use swarmrt_protocol::ipc::{self, IpcError};
 use swarmrt_protocol::services::{EVENT_CONTROL, RunServices};
@@ -46,6 +49,188 @@ pub struct ShellStats {
     pub bad_hello: u64,
     /// Wall-clock cost of the ticks and where it went.
     pub timing: TickTiming,
+    /// Traffic with each remote host (`--hosts` runs only).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub link: Vec<HostTraffic>,
+}
+
+/// How long the world waits at the end for every host to say its robots are gone, before it
+/// closes its session anyway.
+const BYE_TIMEOUT: Duration = Duration::from_secs(8);
+
+/// The remote hosts of a `--hosts` run, as the world's shell sees them.
+struct Remote {
+    link: WorldLink,
+    heard: Receiver<Heard>,
+    /// What a host must present to join: [`swarmrt_hosts::link::layout`] of the config.
+    layout: u32,
+    names: Vec<String>,
+    joined: Vec<bool>,
+    lost: Vec<bool>,
+    /// Remote robots whose current process said hello (bound by their host).
+    bound: BTreeSet<u32>,
+    byes: usize,
+}
+
+impl Remote {
+    fn open(run: &RunServices, hosts: &HostsFile, layout: u32) -> Result<Remote, IpcError> {
+        let (link, heard) = WorldLink::open(hosts, run.run_id())?;
+        let heard =
+            swarmrt_hosts::link::wake_relay(run, format!("{}-link", run.world_node_name()), heard)?;
+        let n = hosts.hosts.len();
+        Ok(Remote {
+            link,
+            heard,
+            layout,
+            names: hosts.hosts.iter().map(|h| h.name.clone()).collect(),
+            joined: vec![false; n],
+            lost: vec![false; n],
+            bound: BTreeSet::new(),
+            byes: 0,
+        })
+    }
+
+    /// Sends each live host its slots of this tick and which of its robots the world waits for.
+    fn send_tick(
+        &mut self,
+        tick: u64,
+        obs: &[Observation],
+        waiting: &BTreeSet<u32>,
+    ) -> Result<(), IpcError> {
+        for i in 0..self.link.len() {
+            if self.lost[i] {
+                continue;
+            }
+            let r = self.link.robots(i);
+            let msg = Down::Tick {
+                tick,
+                expect: waiting.range(r.clone()).copied().collect(),
+                slots: obs[r.start as usize..r.end as usize].to_vec(),
+            };
+            self.link.send(i, &msg)?;
+        }
+        Ok(())
+    }
+
+    /// Applies what the hosts said. `hello_phase` is true before tick 0, when `waiting` holds
+    /// the robots that have not said hello; afterwards it holds those the tick waits for.
+    #[allow(clippy::too_many_arguments)]
+    fn drain(
+        &mut self,
+        world: &mut World,
+        hello_phase: bool,
+        waiting: &mut BTreeSet<u32>,
+        reborn: &mut BTreeSet<u32>,
+        commands: &mut [Option<Command>],
+        stats: &mut ShellStats,
+    ) -> Result<(), IpcError> {
+        while let Ok(h) = self.heard.try_recv() {
+            match h {
+                Heard::Malformed { host } => self.link.count_up(host, 0, true),
+                Heard::Lost { host } => self.lose(host, world, waiting),
+                Heard::Up { host, msg, bytes } => {
+                    self.link.count_up(host, bytes, false);
+                    match msg {
+                        Up::Join { host: name, layout } => {
+                            if layout != self.layout || name != self.names[host] {
+                                let why = format!(
+                                    "host {:?} runs another swarmrt build or config (layout {layout:08x}, the world's {:08x})",
+                                    self.names[host], self.layout
+                                );
+                                self.link.send(host, &Down::Refuse(why.clone()))?;
+                                return Err(why.into());
+                            }
+                            self.joined[host] = true;
+                            self.link.send(host, &Down::Welcome)?;
+                        }
+                        Up::Bye => self.byes += 1,
+                        Up::Commands(entries) => {
+                            let range = self.link.robots(host);
+                            for (robot, c) in entries {
+                                if !range.contains(&robot) {
+                                    stats.unknown_sender += 1;
+                                    continue;
+                                }
+                                let hello = c.version == PROTOCOL_VERSION
+                                    && CommandKind::from_u32(c.kind) == Some(CommandKind::Hello);
+                                if !self.bound.contains(&robot) {
+                                    let expected = if hello_phase {
+                                        waiting.remove(&robot)
+                                    } else {
+                                        reborn.remove(&robot)
+                                    };
+                                    if hello && expected {
+                                        self.bound.insert(robot);
+                                    } else if hello {
+                                        stats.bad_hello += 1;
+                                    } else {
+                                        stats.unknown_sender += 1;
+                                    }
+                                } else if !hello_phase && waiting.remove(&robot) {
+                                    commands[robot as usize] = Some(c);
+                                } else {
+                                    stats.extra_commands += 1;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A host's session is gone: its robots are dead from this tick.
+    fn lose(&mut self, host: usize, world: &mut World, waiting: &mut BTreeSet<u32>) {
+        if self.lost[host] {
+            return;
+        }
+        self.lost[host] = true;
+        let mut robots = Vec::new();
+        for r in self.link.robots(host) {
+            self.bound.remove(&r);
+            waiting.remove(&r);
+            if world.robots()[r as usize].state != RobotState::Dead {
+                world.mark_dead(r, &format!("host {} lost", self.names[host]));
+                robots.push(r);
+            }
+        }
+        tracing::warn!(host = %self.names[host], ?robots, "host lost; its robots are dead");
+        report(&WorldReport::HostLost {
+            host: self.names[host].clone(),
+            robots,
+        });
+    }
+
+    /// Tells every live host the run is over and waits (bounded) until each has seen its
+    /// robots out, so the shutdown is delivered before the session closes.
+    fn finish(mut self, tick: u64, stats: &mut ShellStats) {
+        let mut expected = 0;
+        for i in 0..self.link.len() {
+            if !self.lost[i] && self.link.send(i, &Down::Shutdown { tick }).is_ok() {
+                expected += usize::from(self.joined[i]);
+            }
+        }
+        let until = Instant::now() + BYE_TIMEOUT;
+        while self.byes < expected {
+            match self.heard.recv_deadline(until) {
+                Ok(Heard::Up { host, msg, bytes }) => {
+                    self.link.count_up(host, bytes, false);
+                    if msg == Up::Bye {
+                        self.byes += 1;
+                    }
+                }
+                Ok(Heard::Lost { host }) if !self.lost[host] => {
+                    self.lost[host] = true;
+                    expected -= usize::from(self.joined[host]);
+                }
+                Ok(_) => {}
+                Err(_) => break,
+            }
+        }
+        stats.link = self.link.traffic().to_vec();
+        self.link.close();
+    }
 }
 
 /// Sleeps until the command event fires or `timeout` passes. A termination signal arriving
@@ -110,12 +295,15 @@ fn spawn_control_thread(run: RunServices) -> Receiver<Control> {
     rx
 }
 
-/// Runs the world of `run` with `cfg`, writing records into `out_dir`.
+/// Runs the world of `run` with `cfg`, writing records into `out_dir`. With `hosts`, the
+/// robots it names run on other hosts and are reached over Zenoh; `layout` is what their
+/// hosts must present to join.
 pub fn run(
     run: &RunServices,
     cfg: &Config,
     out_dir: &Path,
     vocabulary: swarmrt_protocol::Vocabulary,
+    hosts: Option<(&HostsFile, u32)>,
 ) -> Result<(), IpcError> {
     let n = cfg.robots.count as usize;
     let mut world = World::new(cfg, vocabulary).map_err(|e| format!("{}: {}", e.key, e.message))?;
@@ -147,6 +335,10 @@ pub fn run(
         n,
     )?;
     let control = spawn_control_thread(run.clone());
+    let mut remote = match hosts {
+        Some((file, layout)) => Some(Remote::open(run, file, layout)?),
+        None => None,
+    };
     report(&WorldReport::Listening);
 
     let mut stats = ShellStats::default();
@@ -174,6 +366,16 @@ pub fn run(
                     "ignoring a hello that is malformed or claims a taken id"
                 );
             }
+        }
+        if let Some(r) = remote.as_mut() {
+            r.drain(
+                &mut world,
+                true,
+                &mut waiting,
+                &mut BTreeSet::new(),
+                &mut [],
+                &mut stats,
+            )?;
         }
         interrupted |= drain_control(&control, &node, &mut world, &mut waiting)?;
         if waiting.is_empty() || interrupted {
@@ -212,6 +414,9 @@ pub fn run(
             match signal {
                 ProcessSignal::Kill(robot) => {
                     robot_of.retain(|_, r| *r != robot);
+                    if let Some(r) = remote.as_mut() {
+                        r.bound.remove(&robot);
+                    }
                     reborn.remove(&robot);
                     report(&WorldReport::Kill { robot });
                 }
@@ -220,6 +425,9 @@ pub fn run(
                 ProcessSignal::Restart { robot, incarnation } => {
                     // Samples from the old process are no robot's answer any more.
                     robot_of.retain(|_, r| *r != robot);
+                    if let Some(r) = remote.as_mut() {
+                        r.bound.remove(&robot);
+                    }
                     reborn.insert(robot);
                     report(&WorldReport::Restart { robot, incarnation });
                 }
@@ -241,6 +449,16 @@ pub fn run(
                 &mut commands,
                 &mut stats,
             )?;
+            if let Some(r) = remote.as_mut() {
+                r.drain(
+                    &mut world,
+                    false,
+                    &mut none,
+                    &mut reborn,
+                    &mut commands,
+                    &mut stats,
+                )?;
+            }
             interrupted |= drain_control(&control, &node, &mut world, &mut none)?;
             rejoining.retain(|r| {
                 reborn.contains(r) && world.robots()[*r as usize].state != RobotState::Dead
@@ -273,6 +491,13 @@ pub fn run(
         let t0 = Instant::now();
         world.observe(&mut obs);
         let t1 = Instant::now();
+        commands.iter_mut().for_each(|c| *c = None);
+        let mut waiting: BTreeSet<u32> = world
+            .robots()
+            .iter()
+            .filter(|r| r.state.expects_command())
+            .map(|r| r.id)
+            .collect();
         let sample = publisher.loan_slice_uninit(n)?;
         let mut sample = sample.write_from_slice(&obs);
         *sample.user_header_mut() = ObservationHeader {
@@ -282,15 +507,11 @@ pub fn run(
         };
         sample.send()?;
         obs_notifier.notify()?;
+        if let Some(r) = remote.as_mut() {
+            r.send_tick(tick, &obs, &waiting)?;
+        }
         let t2 = Instant::now();
 
-        commands.iter_mut().for_each(|c| *c = None);
-        let mut waiting: BTreeSet<u32> = world
-            .robots()
-            .iter()
-            .filter(|r| r.state.expects_command())
-            .map(|r| r.id)
-            .collect();
         let sent_at = Instant::now();
         let mut late_logged = false;
         loop {
@@ -302,6 +523,16 @@ pub fn run(
                 &mut commands,
                 &mut stats,
             )?;
+            if let Some(r) = remote.as_mut() {
+                r.drain(
+                    &mut world,
+                    false,
+                    &mut waiting,
+                    &mut reborn,
+                    &mut commands,
+                    &mut stats,
+                )?;
+            }
             interrupted |= drain_control(&control, &node, &mut world, &mut waiting)?;
             if waiting.is_empty() || interrupted {
                 break;
@@ -310,6 +541,9 @@ pub fn run(
             if waited >= unresponsive {
                 for robot in std::mem::take(&mut waiting) {
                     robot_of.retain(|_, r| *r != robot);
+                    if let Some(r) = remote.as_mut() {
+                        r.bound.remove(&robot);
+                    }
                     give_up(&mut world, robot, waited, "no answer");
                 }
                 break;
@@ -360,6 +594,9 @@ pub fn run(
     };
     sample.send()?;
     obs_notifier.notify()?;
+    if let Some(r) = remote.take() {
+        r.finish(world.tick(), &mut stats);
+    }
     // Deaths marked after the last recorded tick: events only, the tick's rows exist.
     recorder.record_events(&world.drain_events())?;
     stats.timing = timer.summary();

@@ -8,5 +8,21 @@ use crate::error::SwarmResult;
 pub fn check(args: &CheckArgs) -> SwarmResult<()> {
     let cfg = load_config(&args.config, &args.set)?;
     print!("{}", cfg.to_toml());
+    if let Some(path) = &args.hosts {
+        let file = swarmrt_hosts::HostsFile::load(path, cfg.robots.count)?;
+        println!(
+            "\n# {}: the world listens on {}",
+            path.display(),
+            file.listen
+        );
+        let remote: u32 = file.hosts.iter().map(|h| h.robots.len() as u32).sum();
+        println!("# beside the world: {} robots", cfg.robots.count - remote);
+        for h in &file.hosts {
+            println!(
+                "# host {}: robots {}..{} via {:?}, connecting to {}",
+                h.name, h.robots.start, h.robots.end, h.launcher, h.connect
+            );
+        }
+    }
     Ok(())
 }

@@ -51,7 +51,22 @@ pub fn run(
             (dir, lock)
         }
     };
+    let hosts = match &args.hosts {
+        Some(path) => Some(swarmrt_hosts::HostsFile::load(path, cfg.robots.count)?),
+        None => None,
+    };
     let config_path = run_dir::prepare(&dir, &cfg)?;
+    let hosts = match (hosts, &args.hosts) {
+        (Some(file), Some(path)) => {
+            // The world reads it from the run directory, which also keeps it with the records.
+            let copy = dir.join("hosts.toml");
+            std::fs::copy(path, &copy).map_err(|e| {
+                SwarmError::Internal(anyhow::anyhow!("cannot copy {}: {e}", path.display()))
+            })?;
+            Some(crate::hosts::RunHosts { file, path: copy })
+        }
+        _ => None,
+    };
     run_dir::reserve_metrics_room(&dir, cfg.robots.count);
     let pb = progress_bar(cfg.scenario.ticks);
     let started = Instant::now();
@@ -86,11 +101,23 @@ pub fn run(
         metrics["reproducible"] = json!(!interrupted);
         failure = None;
     } else {
-        let out = match processes::run(&cfg, &config_path, &dir, interrupt, |t| pb.set_position(t))
-        {
+        let out = match processes::run_on_hosts(
+            &cfg,
+            &config_path,
+            &dir,
+            hosts.as_ref(),
+            interrupt,
+            |t| pb.set_position(t),
+        ) {
             Ok(out) => out,
             Err(e) => {
                 pb.finish_and_clear();
+                // A bad or unreachable host is the user's to fix: one line, exit 2.
+                if let Some(h) = e.downcast_ref::<crate::hosts::HostFailure>() {
+                    let line = h.to_string();
+                    let _ = failed_early(&dir, &cfg, metrics, started, e);
+                    return Err(SwarmError::User(line));
+                }
                 return Err(failed_early(&dir, &cfg, metrics, started, e));
             }
         };
@@ -101,6 +128,9 @@ pub fn run(
         metrics["interrupted"] = json!(out.interrupted);
         metrics["startup_ms"] = json!(out.startup_ms);
         metrics["processes"] = json!(out.processes);
+        if let Some(h) = &out.hosts {
+            metrics["hosts"] = h.clone();
+        }
         metrics["unscheduled_deaths"] = json!(
             out.unscheduled_deaths
                 .iter()

@@ -1,11 +1,12 @@
-//! Removing a run's iceoryx2 files and shared-memory segments, on every exit path and for
-//! `swarm clean`. Every run lives under its own root directory and shm prefix, so removal is
-//! exact: nothing of another run, or of other iceoryx2 users, is touched.
+//! Removing a run's iceoryx2 files and shared-memory segments, on every exit path, for
+//! `swarm clean` and for `swarm-host` on a remote host. Every run lives under its own root
+//! directory and shm prefix, so removal is exact: nothing of another run, or of other
+//! iceoryx2 users, is touched.
 
-use std::path::Path;
-use swarmrt_protocol::services::{
+use crate::services::{
     IPC_BASE_DIR, LEGACY_IPC_BASE_DIR, SHM_DIR, ipc_root_of, shm_prefix_of, valid_run_id,
 };
+use std::path::Path;
 
 /// File in a run's iceoryx2 root holding the orchestrator's pid.
 pub const OWNER_FILE: &str = "swarmrt-owner.pid";

@@ -1,0 +1,129 @@
+//! The Zenoh side shared by both ends: key expressions, session configs, the layout hash of
+//! the handshake, and the relay that wakes an iceoryx2 listener when a message arrives.
+//!
+//! Zenoh is used directly (not iceoryx2's prototype Zenoh tunnel, see issue 16): reliable,
+//! blocking on congestion and express, explicit endpoints, no scouting. The world's session
+//! listens; each host's session is a client of it, so a host receives only what it
+//! subscribed to: its own observation slots.
+
+use crossbeam_channel::Receiver;
+use iceoryx2::prelude::*;
+use swarmrt_protocol::PROTOCOL_VERSION;
+use swarmrt_protocol::ipc::{self, IpcError};
+use swarmrt_protocol::messages::{Command, MAX_INBOX, MAX_LIDAR_RAYS, MAX_OUTBOX, Observation};
+use swarmrt_protocol::services::{EVENT_CONTROL, RunServices};
+use zenoh::Wait;
+
+/// Error type of the link.
+pub type LinkError = Box<dyn std::error::Error + Send + Sync>;
+
+/// How long a Zenoh transport lives without hearing its peer: a cut link is noticed (and
+/// the liveliness tokens behind it vanish) after this. Zenoh's default is 10 s.
+pub const LEASE_MS: u64 = 3_000;
+
+/// World -> host `name`.
+pub fn down_key(run_id: &str, host: &str) -> String {
+    format!("swarmrt/{run_id}/host/{host}/down")
+}
+
+/// Host -> world, from every host.
+pub fn up_key(run_id: &str, host: &str) -> String {
+    format!("swarmrt/{run_id}/host/{host}/up")
+}
+
+/// The liveliness token of host `name` (present while its session is).
+pub fn host_token(run_id: &str, host: &str) -> String {
+    format!("swarmrt/{run_id}/alive/{host}")
+}
+
+/// The liveliness token of the world.
+pub fn world_token(run_id: &str) -> String {
+    format!("swarmrt/{run_id}/alive-world")
+}
+
+fn common(mode: &str) -> String {
+    format!(
+        r#"{{
+            mode: "{mode}",
+            scouting: {{ multicast: {{ enabled: false }}, gossip: {{ enabled: true }} }},
+            transport: {{ link: {{ tx: {{ lease: {LEASE_MS} }} }} }},
+        }}"#
+    )
+}
+
+/// The world's session: listens on `listen`, connects nowhere.
+pub fn world_session(listen: &str) -> Result<zenoh::Session, LinkError> {
+    let mut c = zenoh::Config::from_json5(&common("peer"))?;
+    c.insert_json5("listen/endpoints", &serde_json::to_string(&[listen])?)?;
+    zenoh::open(c).wait()
+}
+
+/// A host's session: a client of the world at `connect`, trying for up to 10 s.
+pub fn host_session(connect: &str) -> Result<zenoh::Session, LinkError> {
+    let mut c = zenoh::Config::from_json5(&common("client"))?;
+    c.insert_json5("connect/endpoints", &serde_json::to_string(&[connect])?)?;
+    c.insert_json5("connect/timeout_ms", "10000")?;
+    c.insert_json5("connect/exit_on_failure", "true")?;
+    zenoh::open(c).wait()
+}
+
+/// What both ends must agree on before robots start: the message layout of the build and the
+/// resolved config text (a host given another config would replay another run).
+pub fn layout(config_toml: &str) -> u32 {
+    let mut h = crc32fast::Hasher::new();
+    let shape = format!(
+        "swarmrt v{PROTOCOL_VERSION} obs {} cmd {} rays {MAX_LIDAR_RAYS} inbox {MAX_INBOX} outbox {MAX_OUTBOX}\n",
+        std::mem::size_of::<Observation>(),
+        std::mem::size_of::<Command>(),
+    );
+    h.update(shape.as_bytes());
+    h.update(config_toml.as_bytes());
+    h.finalize()
+}
+
+/// Starts a thread that forwards every message of `from` to the returned receiver and then
+/// wakes the listener of the run's command event (event [`EVENT_CONTROL`]), so a loop that
+/// sleeps in that listener also wakes for link messages, control lines and reaped children.
+/// Ends when every sender of `from` is gone.
+pub fn wake_relay<T: Send + 'static>(
+    run: &RunServices,
+    node_name: String,
+    from: Receiver<T>,
+) -> Result<Receiver<T>, IpcError> {
+    let (tx, rx) = crossbeam_channel::unbounded();
+    let (ready_tx, ready_rx) = crossbeam_channel::bounded::<Result<(), String>>(1);
+    let run = run.clone();
+    std::thread::Builder::new()
+        .name("wake-relay".into())
+        .spawn(move || {
+            let made = ipc::node(&run, &node_name).and_then(|node| {
+                let ev = ipc::open_commands_event(&node, &run)?;
+                let n = ev
+                    .notifier_builder()
+                    .default_event_id(EventId::new(EVENT_CONTROL))
+                    .create()?;
+                Ok((node, n))
+            });
+            let (_node, notifier) = match made {
+                Ok(x) => {
+                    let _ = ready_tx.send(Ok(()));
+                    x
+                }
+                Err(e) => {
+                    let _ = ready_tx.send(Err(e.to_string()));
+                    return;
+                }
+            };
+            for m in from {
+                if tx.send(m).is_err() {
+                    return;
+                }
+                // The message is queued before the listener wakes.
+                let _ = notifier.notify();
+            }
+        })?;
+    ready_rx
+        .recv()
+        .map_err(|_| "wake relay died".to_string())??;
+    Ok(rx)
+}

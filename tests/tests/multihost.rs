@@ -1,0 +1,328 @@
+//! One swarm across three emulated hosts (issue 16): network namespaces joined by a bridge,
+//! each host with its own /dev/shm, the world on host 0 and groups of robots on hosts 1 and 2
+//! reached over Zenoh. Needs root and iproute2; fails (never skips) without them.
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use swarmrt_tests::lab::Lab;
+use swarmrt_tests::{LOSSY_RADIO, assert_ok, bytes, metrics, swarm_bin, workspace};
+
+const LIMIT: Duration = Duration::from_secs(300);
+
+fn lab() -> Lab {
+    Lab::new(3).unwrap_or_else(|e| {
+        panic!("cannot build the emulated hosts (this test needs root and iproute2): {e}")
+    })
+}
+
+/// A hosts file: the world on host 0, `counts[i]` robots on host i + 1.
+fn hosts_file(lab: &Lab, dir: &Path, counts: &[u32], extra: &str) -> std::path::PathBuf {
+    let mut text = format!("[world]\nlisten = \"tcp/{}:7447\"\n", lab.addr(0));
+    for (i, c) in counts.iter().enumerate() {
+        let launcher: Vec<String> = lab
+            .launcher(i + 1)
+            .iter()
+            .map(|s| format!("{s:?}"))
+            .collect();
+        text += &format!(
+            "\n[[host]]\nname = \"h{}\"\nlauncher = [{}]\nrobots = {c}\n{extra}",
+            i + 1,
+            launcher.join(", ")
+        );
+    }
+    let path = dir.join("hosts.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// `swarm args...` on host 0.
+fn swarm_on_host0(lab: &Lab, args: &[&str]) -> std::process::Child {
+    let l = lab.launcher(0);
+    // nsenter -m starts in /; the configs are relative to the workspace.
+    let wd = format!("--wd={}", workspace().display());
+    Command::new(&l[0])
+        .args(&l[1..l.len() - 1])
+        .args([wd.as_str(), "--"])
+        .arg(swarm_bin())
+        .args(args)
+        .current_dir(workspace())
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("nsenter starts")
+}
+
+fn run_on_host0(lab: &Lab, args: &[&str]) -> Output {
+    swarmrt_tests::wait_with_watchdog(swarm_on_host0(lab, args), LIMIT)
+}
+
+/// Nothing of the run is left on any host: no process, no shared memory, no iceoryx2 files.
+fn assert_hosts_clean(lab: &Lab) {
+    for i in 0..3 {
+        // Processes the run left would show here (the lab's holder excluded).
+        let since = Instant::now();
+        while !lab.processes(i).is_empty() && since.elapsed() < Duration::from_secs(5) {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        assert_eq!(
+            lab.processes(i),
+            Vec::<i32>::new(),
+            "processes left on host {i}"
+        );
+        let shm: Vec<String> = lab
+            .shm(i)
+            .into_iter()
+            .filter(|e| e.starts_with("swarmrt"))
+            .collect();
+        // The base directory of run roots may stay; no run root or segment may.
+        let roots = lab_roots(lab, i);
+        assert!(
+            shm.iter().all(|e| e == "swarmrt-iceoryx2") && roots.is_empty(),
+            "host {i} keeps {shm:?} {roots:?}"
+        );
+    }
+}
+
+fn lab_roots(lab: &Lab, i: usize) -> Vec<String> {
+    let l = lab.launcher(i);
+    let out = Command::new(&l[0])
+        .args(&l[1..])
+        .args(["ls", "-A", "/dev/shm/swarmrt-iceoryx2"])
+        .output()
+        .unwrap();
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn three_hosts_write_the_bytes_of_one_with_remote_faults() {
+    let lab = lab();
+    let tmp = tempfile::tempdir().unwrap();
+    // Robots 5 and 6 on host 2, 7 and 8 on host 1: a kill, a freeze and a restart all land
+    // on remote robots, over a lossy, late radio.
+    let faults = [
+        "--set",
+        "faults.kill=[{tick=60,robot=8}]",
+        "--set",
+        "faults.freeze=[{robot=5,from=70,to=110}]",
+        "--set",
+        "faults.restart=[{tick=120,robot=7,down_ticks=10}]",
+    ];
+    let mut common = vec!["--ticks", "300"];
+    common.extend_from_slice(&faults);
+    common.extend_from_slice(&LOSSY_RADIO);
+    let one = tmp.path().join("one");
+    let mut args = vec![
+        "run",
+        "configs/raft_election.toml",
+        "--out",
+        one.to_str().unwrap(),
+    ];
+    args.extend_from_slice(&common);
+    assert_ok(&swarmrt_tests::swarm(&args, LIMIT));
+
+    let hosts = hosts_file(&lab, tmp.path(), &[2, 2], "");
+    let three = tmp.path().join("three");
+    let mut args = vec![
+        "run",
+        "configs/raft_election.toml",
+        "--hosts",
+        hosts.to_str().unwrap(),
+        "--out",
+        three.to_str().unwrap(),
+    ];
+    args.extend_from_slice(&common);
+    assert_ok(&run_on_host0(&lab, &args));
+
+    for f in ["trajectory.csv", "events.jsonl"] {
+        assert!(
+            bytes(&one, f) == bytes(&three, f),
+            "{f} differs between one host and three"
+        );
+    }
+    let m = metrics(&three);
+    assert_eq!(m["reproducible"], true, "{m}");
+    assert_eq!(m["faults_injected"], 3, "{m}");
+    let ticks = m["ticks"].as_u64().unwrap();
+    // Each host received only its own robots' slots, every tick.
+    for (host, count) in [("h1", 2), ("h2", 2)] {
+        let h = &m["hosts"][host];
+        assert_eq!(h["ticks"].as_u64(), Some(ticks), "{host}: {h}");
+        assert_eq!(
+            h["slots_received"].as_u64(),
+            Some(count * ticks),
+            "{host}: {h}"
+        );
+        assert_eq!(h["malformed"], 0, "{host}: {h}");
+    }
+    assert_eq!(
+        m["hosts"]["h1"]["robots"],
+        serde_json::json!({"start": 7, "end": 9})
+    );
+    assert_eq!(
+        m["hosts"]["h2"]["robots"],
+        serde_json::json!({"start": 5, "end": 7})
+    );
+    // The restarted robot ran twice on host 1; the killed one was killed there.
+    let procs = m["processes"].as_array().unwrap();
+    let on = |robot: u64| -> Vec<&serde_json::Value> {
+        procs.iter().filter(|p| p["robot"] == robot).collect()
+    };
+    assert_eq!(on(7).len(), 2, "{procs:?}");
+    assert!(on(7).iter().all(|p| p["host"] == "h1"));
+    assert_eq!(on(8)[0]["end"], "killed by signal 9");
+    assert_eq!(on(0)[0].get("host"), None, "robot 0 runs beside the world");
+    assert_hosts_clean(&lab);
+}
+
+#[test]
+fn a_killed_host_kills_its_robots_and_the_run_goes_on() {
+    let lab = lab();
+    let tmp = tempfile::tempdir().unwrap();
+    let hosts = hosts_file(&lab, tmp.path(), &[3, 3], "");
+    let out = tmp.path().join("run");
+    let child = swarm_on_host0(
+        &lab,
+        &[
+            "run",
+            "configs/flocking_crossing.toml",
+            "--hosts",
+            hosts.to_str().unwrap(),
+            "--ticks",
+            "100000",
+            "--out",
+            out.to_str().unwrap(),
+            "--set",
+            "scenario.stop_when_done=false",
+        ],
+    );
+    // Once host 2's robots are running, kill its swarm-host.
+    let since = Instant::now();
+    let host_pid = loop {
+        let rows = std::fs::read_to_string(out.join("trajectory.csv"))
+            .map(|t| t.lines().count())
+            .unwrap_or(0);
+        let found = lab.processes(2).into_iter().find(|&p| {
+            std::fs::read_to_string(format!("/proc/{p}/comm"))
+                .is_ok_and(|c| c.trim() == "swarm-host")
+        });
+        if let Some(p) = found
+            && rows > 10 * 50
+        {
+            break p;
+        }
+        assert!(since.elapsed() < LIMIT, "the run never got going");
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    unsafe {
+        libc::kill(host_pid, libc::SIGKILL);
+    }
+    // Let the run go on a while without host 2, then stop it as a user would.
+    std::thread::sleep(Duration::from_secs(2));
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+    let o = swarmrt_tests::wait_with_watchdog(child, LIMIT);
+    let m = metrics(&out);
+    assert!(
+        !String::from_utf8_lossy(&o.stderr).contains("panicked"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(m["reproducible"], false, "{m}");
+    let deaths: Vec<u64> = m["unscheduled_deaths"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["robot"].as_u64().unwrap())
+        .collect();
+    // Host 2 ran robots 4, 5, 6 (host 1 the top three, 7-9).
+    assert_eq!(deaths, vec![4, 5, 6], "{m}");
+    assert!(m["hosts"]["h2"]["lost"].is_string(), "{m}");
+    // The run went on: host 1's robots kept answering after host 2 was gone.
+    let ticks = m["ticks"].as_u64().unwrap();
+    let h1_ticks = m["hosts"]["h1"]["ticks"].as_u64().unwrap();
+    assert!(
+        h1_ticks + 2 >= ticks,
+        "host 1 saw {h1_ticks} of {ticks} ticks"
+    );
+    let traj = String::from_utf8(bytes(&out, "trajectory.csv")).unwrap();
+    let last_tick = traj
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .to_string();
+    let dead_at_end = traj
+        .lines()
+        .filter(|l| l.starts_with(&format!("{last_tick},")) && l.contains("dead"))
+        .count();
+    assert_eq!(dead_at_end, 3, "host 2's robots are dead at the end");
+    assert_hosts_clean(&lab);
+}
+
+#[test]
+fn bad_or_unreachable_hosts_fail_fast_with_their_name() {
+    let lab = lab();
+    let tmp = tempfile::tempdir().unwrap();
+    // A host that cannot reach the world (nobody listens there).
+    let bad = hosts_file(
+        &lab,
+        tmp.path(),
+        &[2, 2],
+        &format!("connect = \"tcp/{}:7999\"\n", lab.addr(0)),
+    );
+    let started = Instant::now();
+    let o = run_on_host0(
+        &lab,
+        &[
+            "run",
+            "configs/flocking_crossing.toml",
+            "--hosts",
+            bad.to_str().unwrap(),
+            "--out",
+            tmp.path().join("a").to_str().unwrap(),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or_default();
+    assert!(
+        line.contains("host h") && line.contains("cannot reach the world"),
+        "{err}"
+    );
+    assert!(started.elapsed() < Duration::from_secs(60));
+    assert_hosts_clean(&lab);
+
+    // A launcher that does not exist.
+    let text =
+        std::fs::read_to_string(&bad)
+            .unwrap()
+            .replacen("\"nsenter\"", "\"/nonexistent/ssh\"", 1);
+    std::fs::write(&bad, text).unwrap();
+    let o = run_on_host0(
+        &lab,
+        &[
+            "run",
+            "configs/flocking_crossing.toml",
+            "--hosts",
+            bad.to_str().unwrap(),
+            "--out",
+            tmp.path().join("b").to_str().unwrap(),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("host h1: cannot start its launcher"), "{err}");
+    assert_hosts_clean(&lab);
+}
