@@ -58,6 +58,8 @@ struct Remote {
     stdin: Option<ChildStdin>,
     joined: bool,
     done: bool,
+    /// Its launcher has been reaped.
+    exited: bool,
     /// Set once the host is gone or failed: why.
     lost: Option<String>,
     stats: Option<serde_json::Value>,
@@ -150,6 +152,7 @@ impl Remotes {
                 stdin,
                 joined: false,
                 done: false,
+                exited: false,
                 lost: None,
                 stats: None,
             });
@@ -214,6 +217,7 @@ impl Remotes {
     pub fn ended(&mut self, host: usize, how: &str) -> Option<String> {
         let h = &mut self.hosts[host];
         h.stdin = None;
+        h.exited = true;
         if h.done || h.lost.is_some() {
             return None;
         }
@@ -242,9 +246,18 @@ impl Remotes {
         self.file.hosts[host].robots.clone()
     }
 
-    /// Launcher pids not yet reaped... all of them (the caller knows which ended).
+    /// Every launcher's pid.
     pub fn pids(&self) -> Vec<i32> {
         self.hosts.iter().map(|h| h.pid).collect()
+    }
+
+    /// Pids of launchers not reaped yet (a host often ends before the world's last report).
+    pub fn running(&self) -> Vec<i32> {
+        self.hosts
+            .iter()
+            .filter(|h| !h.exited)
+            .map(|h| h.pid)
+            .collect()
     }
 
     /// Closes every host's stdin (a host still running takes that as "the orchestrator is
@@ -257,7 +270,7 @@ impl Remotes {
 
     /// SIGKILLs every launcher (the fail-fast path; cleanup follows).
     pub fn kill(&mut self) {
-        crate::processes::signal_all(&self.pids(), libc::SIGKILL);
+        crate::processes::signal_all(&self.running(), libc::SIGKILL);
     }
 
     /// Every host's counters, by name (`metrics.json` -> `hosts`).

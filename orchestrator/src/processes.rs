@@ -641,7 +641,7 @@ fn supervise(
     };
     if let Some(r) = remotes.as_ref() {
         // Each host sees its robots out after the world's shutdown, then exits.
-        remaining.extend(r.pids().into_iter().filter(|p| !ended.contains_key(p)));
+        remaining.extend(r.running());
     }
     let mut launcher_ends: BTreeMap<i32, String> = BTreeMap::new();
     wait_for_exit(&rx, &remaining, &mut ended, grace, |m| {

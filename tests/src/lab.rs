@@ -35,9 +35,50 @@ fn ip(args: &[&str]) -> Result<(), String> {
     }
 }
 
+/// Installs iproute2 (`ip`) with apt when it is missing, once per test process, so the README's
+/// test command needs no set-up step on a fresh Debian machine. `nsenter` and `unshare` come
+/// with util-linux, which every Debian has.
+fn ensure_iproute2() -> Result<(), String> {
+    static DONE: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
+    DONE.get_or_init(|| {
+        let have = |p: &str| {
+            Command::new(p)
+                .arg("-V")
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .status()
+                .is_ok()
+        };
+        if have("ip") {
+            return Ok(());
+        }
+        let ok = Command::new("apt-get")
+            .args(["install", "-y", "-qq", "iproute2"])
+            .env("DEBIAN_FRONTEND", "noninteractive")
+            .status()
+            .is_ok_and(|s| s.success())
+            || (Command::new("apt-get")
+                .args(["update", "-qq"])
+                .status()
+                .is_ok_and(|s| s.success())
+                && Command::new("apt-get")
+                    .args(["install", "-y", "-qq", "iproute2"])
+                    .env("DEBIAN_FRONTEND", "noninteractive")
+                    .status()
+                    .is_ok_and(|s| s.success()));
+        if ok && have("ip") {
+            Ok(())
+        } else {
+            Err("`ip` (iproute2) is missing and `apt-get install iproute2` failed".into())
+        }
+    })
+    .clone()
+}
+
 impl Lab {
     /// `hosts` hosts at 10.77.0.1, 10.77.0.2, ... on one bridge.
     pub fn new(hosts: usize) -> Result<Lab, String> {
+        ensure_iproute2()?;
         static NEXT: AtomicU32 = AtomicU32::new(0);
         let tag = format!(
             "{}{}",

@@ -182,6 +182,26 @@ fn three_hosts_write_the_bytes_of_one_with_remote_faults() {
 
 #[test]
 fn a_killed_host_kills_its_robots_and_the_run_goes_on() {
+    lose_host_2(|_, host_pid| unsafe {
+        libc::kill(host_pid, libc::SIGKILL);
+    });
+}
+
+#[test]
+fn a_cut_link_kills_the_hosts_robots_and_the_run_goes_on() {
+    lose_host_2(|lab, _| {
+        let ns = lab.netns(2);
+        let out = Command::new("ip")
+            .args(["-n", &ns, "link", "set", "h2", "down"])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "cannot cut host 2's link");
+    });
+}
+
+/// Runs flocking over three hosts and, once it is going, loses host 2 by `lose(lab, pid of
+/// its swarm-host)`; asserts that its robots die, the run goes on and nothing is left.
+fn lose_host_2(lose: impl FnOnce(&Lab, i32)) {
     let lab = lab();
     let tmp = tempfile::tempdir().unwrap();
     let hosts = hosts_file(&lab, tmp.path(), &[3, 3], "");
@@ -219,11 +239,10 @@ fn a_killed_host_kills_its_robots_and_the_run_goes_on() {
         assert!(since.elapsed() < LIMIT, "the run never got going");
         std::thread::sleep(Duration::from_millis(50));
     };
-    unsafe {
-        libc::kill(host_pid, libc::SIGKILL);
-    }
-    // Let the run go on a while without host 2, then stop it as a user would.
-    std::thread::sleep(Duration::from_secs(2));
+    lose(&lab, host_pid);
+    // Let the run go on a while without host 2 (a cut link is noticed after Zenoh's lease,
+    // 3 s), then stop it as a user would.
+    std::thread::sleep(Duration::from_secs(6));
     unsafe {
         libc::kill(child.id() as i32, libc::SIGINT);
     }
