@@ -114,12 +114,26 @@ fn parse_range(file: &str, key: &str, s: &str) -> Result<Range<u32>, ConfigError
 }
 
 impl HostsFile {
-    /// Reads and checks `path` for a run of `robots` robots.
+    /// Reads and checks `path` for a run of `robots` robots, including that every launcher
+    /// is a program this machine can run.
     pub fn load(path: &Path, robots: u32) -> Result<HostsFile, ConfigError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path)
             .map_err(|e| ConfigError::new(&file, "", format!("cannot read: {e}")))?;
-        HostsFile::parse(&file, &text, robots)
+        let hosts = HostsFile::parse(&file, &text, robots)?;
+        for (i, h) in hosts.hosts.iter().enumerate() {
+            if !runnable(&h.launcher[0]) {
+                return Err(ConfigError::new(
+                    &file,
+                    format!("host[{i}].launcher"),
+                    format!(
+                        "cannot find the program {:?} (not an executable file, nor on PATH)",
+                        h.launcher[0]
+                    ),
+                ));
+            }
+        }
+        Ok(hosts)
     }
 
     /// Checks the text of a hosts file named `file` for a run of `robots` robots.
@@ -245,6 +259,19 @@ impl HostsFile {
     pub fn is_local(&self, robot: u32) -> bool {
         self.host_of(robot).is_none()
     }
+}
+
+/// True when `program` names an executable file, directly or through `PATH`.
+fn runnable(program: &str) -> bool {
+    use std::os::unix::fs::PermissionsExt;
+    let exec = |p: &Path| {
+        std::fs::metadata(p).is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
+    };
+    if program.contains('/') {
+        return exec(Path::new(program));
+    }
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| exec(&d.join(program))))
 }
 
 #[cfg(test)]

@@ -69,6 +69,9 @@ struct Remote {
 pub struct Remotes {
     file: HostsFile,
     hosts: Vec<Remote>,
+    /// Remote robots killed on an order and not restarted: a host lost later does not
+    /// count them again as its deaths.
+    killed: std::collections::BTreeSet<u32>,
 }
 
 /// The `swarm-host` command on `host`: its launcher, then the program and its arguments.
@@ -100,6 +103,7 @@ impl Remotes {
         let mut remotes = Remotes {
             file: file.clone(),
             hosts: Vec::new(),
+            killed: Default::default(),
         };
         for (i, h) in file.hosts.iter().enumerate() {
             let mut cmd = host_command(file, i, run_id, &program);
@@ -186,6 +190,15 @@ impl Remotes {
 
     /// Sends `c` to host `host` (a host that is gone is skipped).
     pub fn order(&mut self, host: usize, c: &HostControl) {
+        match *c {
+            HostControl::Kill { robot } => {
+                self.killed.insert(robot);
+            }
+            HostControl::Restart { robot, .. } => {
+                self.killed.remove(&robot);
+            }
+            _ => {}
+        }
         let h = &mut self.hosts[host];
         if let Some(s) = h.stdin.as_mut()
             && s.write_all(c.to_line().as_bytes())
@@ -241,9 +254,13 @@ impl Remotes {
         })
     }
 
-    /// The robot ids of host `host`.
-    pub fn robots(&self, host: usize) -> std::ops::Range<u32> {
-        self.file.hosts[host].robots.clone()
+    /// The robots of host `host` that were alive until now (not killed on an order).
+    pub fn alive_robots(&self, host: usize) -> Vec<u32> {
+        self.file.hosts[host]
+            .robots
+            .clone()
+            .filter(|r| !self.killed.contains(r))
+            .collect()
     }
 
     /// Every launcher's pid.

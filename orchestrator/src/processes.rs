@@ -797,7 +797,7 @@ fn lose_host(
         return;
     }
     tracing::warn!(host = r.name(host), "host lost: {why}");
-    for robot in r.robots(host) {
+    for robot in r.alive_robots(host) {
         let reason = format!("host {} lost: {why}", r.name(host));
         outcome
             .unscheduled_deaths

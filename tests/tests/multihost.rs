@@ -159,6 +159,13 @@ fn three_hosts_write_the_bytes_of_one_with_remote_faults() {
             "{host}: {h}"
         );
         assert_eq!(h["malformed"], 0, "{host}: {h}");
+        // Two messages per host per tick: one batch back per tick (plus the hellos), none
+        // sent early.
+        assert_eq!(h["partial_batches"], 0, "{host}: {h}");
+        assert!(
+            h["batches_up"].as_u64().unwrap() <= ticks + 4,
+            "{host}: {h}"
+        );
     }
     assert_eq!(
         m["hosts"]["h1"]["robots"],
@@ -342,6 +349,11 @@ fn bad_or_unreachable_hosts_fail_fast_with_their_name() {
     );
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("host h1: cannot start its launcher"), "{err}");
+    assert!(
+        err.contains("hosts.toml")
+            && err.contains("host[0].launcher")
+            && err.contains("/nonexistent/ssh"),
+        "{err}"
+    );
     assert_hosts_clean(&lab);
 }
