@@ -1,17 +1,13 @@
-//! The Zenoh side shared by both ends: key expressions, session configs, the layout hash of
-//! the handshake, and the relay that wakes an iceoryx2 listener when a message arrives.
+//! The Zenoh side shared by both ends: key expressions, session configs and the layout hash
+//! of the handshake.
 //!
 //! Zenoh is used directly (not iceoryx2's prototype Zenoh tunnel, see issue 16): reliable,
 //! blocking on congestion and express, explicit endpoints, no scouting. The world's session
 //! listens; each host's session is a client of it, so a host receives only what it
 //! subscribed to: its own observation slots.
 
-use crossbeam_channel::Receiver;
-use iceoryx2::prelude::*;
 use swarmrt_protocol::PROTOCOL_VERSION;
-use swarmrt_protocol::ipc::{self, IpcError};
 use swarmrt_protocol::messages::{Command, MAX_INBOX, MAX_LIDAR_RAYS, MAX_OUTBOX, Observation};
-use swarmrt_protocol::services::{EVENT_CONTROL, RunServices};
 use zenoh::Wait;
 
 /// Error type of the link.
@@ -79,51 +75,4 @@ pub fn layout(config_toml: &str) -> u32 {
     h.update(shape.as_bytes());
     h.update(config_toml.as_bytes());
     h.finalize()
-}
-
-/// Starts a thread that forwards every message of `from` to the returned receiver and then
-/// wakes the listener of the run's command event (event [`EVENT_CONTROL`]), so a loop that
-/// sleeps in that listener also wakes for link messages, control lines and reaped children.
-/// Ends when every sender of `from` is gone.
-pub fn wake_relay<T: Send + 'static>(
-    run: &RunServices,
-    node_name: String,
-    from: Receiver<T>,
-) -> Result<Receiver<T>, IpcError> {
-    let (tx, rx) = crossbeam_channel::unbounded();
-    let (ready_tx, ready_rx) = crossbeam_channel::bounded::<Result<(), String>>(1);
-    let run = run.clone();
-    std::thread::Builder::new()
-        .name("wake-relay".into())
-        .spawn(move || {
-            let made = ipc::node(&run, &node_name).and_then(|node| {
-                let ev = ipc::open_commands_event(&node, &run)?;
-                let n = ev
-                    .notifier_builder()
-                    .default_event_id(EventId::new(EVENT_CONTROL))
-                    .create()?;
-                Ok((node, n))
-            });
-            let (_node, notifier) = match made {
-                Ok(x) => {
-                    let _ = ready_tx.send(Ok(()));
-                    x
-                }
-                Err(e) => {
-                    let _ = ready_tx.send(Err(e.to_string()));
-                    return;
-                }
-            };
-            for m in from {
-                if tx.send(m).is_err() {
-                    return;
-                }
-                // The message is queued before the listener wakes.
-                let _ = notifier.notify();
-            }
-        })?;
-    ready_rx
-        .recv()
-        .map_err(|_| "wake relay died".to_string())??;
-    Ok(rx)
 }

@@ -398,8 +398,8 @@ fn supervise(
     // Processes the fault schedule stopped; they get SIGCONT before any shutdown.
     let mut frozen: BTreeSet<i32> = BTreeSet::new();
     // Remote robot processes: (host, pid) -> (robot, incarnation), and how each ended.
-    let mut remote_started: Vec<(usize, i32, u32, u32)> = Vec::new();
-    let mut remote_ended: BTreeMap<(usize, i32), (String, bool)> = BTreeMap::new();
+    let mut remote_started: RemoteStarts = Vec::new();
+    let mut remote_ended: RemoteEnds = BTreeMap::new();
     let mut ready = false;
     // A host that failed before tick 0 fails the run.
     let mut startup_failure: Option<crate::hosts::HostFailure> = None;
@@ -516,73 +516,30 @@ fn supervise(
                 } else if let Some(id) = robots.remove(&pid) {
                     frozen.remove(&pid);
                     ended.insert(pid, how.clone());
-                    if scheduled_kills.contains(&pid) {
-                        // The world accounted for this fault at its tick; it only reclaims
-                        // the old process's ports (a restarted robot lives on).
-                        send_control(&mut world_stdin, &Control::Reaped { robot: id });
-                    } else {
-                        // Code 0 is a robot that saw the world's shutdown sample before we
-                        // saw the world's Done report: a clean end, not a death.
-                        if how != CLEAN_EXIT {
-                            tracing::warn!(robot = id, "robot process {how}");
-                            outcome.unscheduled_deaths.insert(id, how.clone());
-                        }
-                        send_control(
-                            &mut world_stdin,
-                            &Control::RobotDied {
-                                robot: id,
-                                reason: format!("process {how}"),
-                            },
-                        );
-                    }
+                    let scheduled = scheduled_kills.contains(&pid);
+                    robot_ended(id, &how, scheduled, &mut outcome, &mut world_stdin);
                 }
             }
             Msg::Host(host, HostMsg::Report(report)) => {
                 let Some(r) = remotes.as_mut() else { continue };
                 r.note(host, &report);
-                match report {
-                    HostReport::Started {
-                        robot,
-                        incarnation,
-                        pid,
-                    } => remote_started.push((host, pid, robot, incarnation)),
-                    HostReport::Exited {
-                        robot,
-                        pid,
-                        how,
-                        ordered,
-                    } => {
-                        remote_ended.insert((host, pid), (how.clone(), ordered));
-                        if ordered {
-                            send_control(&mut world_stdin, &Control::Reaped { robot });
-                        } else {
-                            if how != CLEAN_EXIT {
-                                tracing::warn!(robot, host = r.name(host), "robot process {how}");
-                                outcome.unscheduled_deaths.insert(robot, how.clone());
-                            }
-                            send_control(
-                                &mut world_stdin,
-                                &Control::RobotDied {
-                                    robot,
-                                    reason: format!("process {how}"),
-                                },
-                            );
-                        }
-                    }
-                    HostReport::Failed { .. } => {
-                        if let Some(why) = r.lost(host).map(str::to_string) {
-                            lose_host(
-                                r,
-                                host,
-                                &why,
-                                ready,
-                                &mut startup_failure,
-                                &mut outcome,
-                                &mut world_stdin,
-                            );
-                        }
-                    }
-                    HostReport::Joined | HostReport::Done { .. } => {}
+                if let Some((robot, how, ordered)) =
+                    record_remote(host, &report, &mut remote_started, &mut remote_ended)
+                {
+                    robot_ended(robot, &how, ordered, &mut outcome, &mut world_stdin);
+                }
+                if let HostReport::Failed { .. } = report
+                    && let Some(why) = r.lost(host).map(str::to_string)
+                {
+                    lose_host(
+                        r,
+                        host,
+                        &why,
+                        ready,
+                        &mut startup_failure,
+                        &mut outcome,
+                        &mut world_stdin,
+                    );
                 }
             }
             Msg::Host(_, HostMsg::Eof) => {}
@@ -647,19 +604,7 @@ fn supervise(
     wait_for_exit(&rx, &remaining, &mut ended, grace, |m| {
         if let (Msg::Host(host, HostMsg::Report(report)), Some(r)) = (m, remotes.as_mut()) {
             r.note(host, &report);
-            match report {
-                HostReport::Started {
-                    robot,
-                    incarnation,
-                    pid,
-                } => remote_started.push((host, pid, robot, incarnation)),
-                HostReport::Exited {
-                    pid, how, ordered, ..
-                } => {
-                    remote_ended.insert((host, pid), (how, ordered));
-                }
-                _ => {}
-            }
+            record_remote(host, &report, &mut remote_started, &mut remote_ended);
         }
     });
     if let Some(r) = remotes.as_ref() {
@@ -805,4 +750,66 @@ fn lose_host(
             .or_insert(reason.clone());
         send_control(world_stdin, &Control::RobotDied { robot, reason });
     }
+}
+
+/// Remote robot processes: (host, pid, robot, incarnation) in start order.
+type RemoteStarts = Vec<(usize, i32, u32, u32)>;
+/// How each remote robot process ended: (host, pid) -> (how, killed on an order).
+type RemoteEnds = BTreeMap<(usize, i32), (String, bool)>;
+
+/// Notes a remote robot process's start or end; an end is returned (robot, how, ordered).
+fn record_remote(
+    host: usize,
+    report: &HostReport,
+    started: &mut RemoteStarts,
+    ended: &mut RemoteEnds,
+) -> Option<(u32, String, bool)> {
+    match report {
+        HostReport::Started {
+            robot,
+            incarnation,
+            pid,
+        } => {
+            started.push((host, *pid, *robot, *incarnation));
+            None
+        }
+        HostReport::Exited {
+            robot,
+            pid,
+            how,
+            ordered,
+        } => {
+            ended.insert((host, *pid), (how.clone(), *ordered));
+            Some((*robot, how.clone(), *ordered))
+        }
+        _ => None,
+    }
+}
+
+/// A robot process ended (`how`), here or on a remote host. A process the fault schedule
+/// killed is no death: the world accounted for it at its tick and only reclaims its ports.
+/// Otherwise the world is told, and any end but the clean one after the world's shutdown
+/// sample (which can come before we see the world's Done) is an unscheduled death.
+fn robot_ended(
+    robot: u32,
+    how: &str,
+    scheduled: bool,
+    outcome: &mut ProcessOutcome,
+    world_stdin: &mut Option<ChildStdin>,
+) {
+    if scheduled {
+        send_control(world_stdin, &Control::Reaped { robot });
+        return;
+    }
+    if how != CLEAN_EXIT {
+        tracing::warn!(robot, "robot process {how}");
+        outcome.unscheduled_deaths.insert(robot, how.to_string());
+    }
+    send_control(
+        world_stdin,
+        &Control::RobotDied {
+            robot,
+            reason: format!("process {how}"),
+        },
+    );
 }

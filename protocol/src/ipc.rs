@@ -16,7 +16,7 @@ use iceoryx2_bb_system_types::file_name::FileName;
 use iceoryx2_bb_system_types::path::Path as IoxPath;
 
 use crate::messages::{Command, Observation, ObservationHeader};
-use crate::services::RunServices;
+use crate::services::{EVENT_CONTROL, RunServices};
 
 /// Shortcut for the iceoryx2 service flavour every process uses.
 pub type Svc = ipc::Service;
@@ -298,4 +298,51 @@ impl RobotPorts {
     pub fn hello(&self, id: u32) -> Result<(), IpcError> {
         self.send(Command::hello(id, std::process::id()))
     }
+}
+
+/// Starts a thread that forwards every message of `from` to the returned receiver and then
+/// wakes the listener of the run's command event (event [`EVENT_CONTROL`]), so a loop that
+/// sleeps in that listener also wakes for link messages, control lines and reaped children.
+/// Ends when every sender of `from` is gone.
+pub fn wake_relay<T: Send + 'static>(
+    run: &RunServices,
+    node_name: String,
+    from: crossbeam_channel::Receiver<T>,
+) -> Result<crossbeam_channel::Receiver<T>, IpcError> {
+    let (tx, rx) = crossbeam_channel::unbounded();
+    let (ready_tx, ready_rx) = crossbeam_channel::bounded::<Result<(), String>>(1);
+    let run = run.clone();
+    std::thread::Builder::new()
+        .name("wake-relay".into())
+        .spawn(move || {
+            let made = node(&run, &node_name).and_then(|node| {
+                let ev = open_commands_event(&node, &run)?;
+                let n = ev
+                    .notifier_builder()
+                    .default_event_id(EventId::new(EVENT_CONTROL))
+                    .create()?;
+                Ok((node, n))
+            });
+            let (_node, notifier) = match made {
+                Ok(x) => {
+                    let _ = ready_tx.send(Ok(()));
+                    x
+                }
+                Err(e) => {
+                    let _ = ready_tx.send(Err(e.to_string()));
+                    return;
+                }
+            };
+            for m in from {
+                if tx.send(m).is_err() {
+                    return;
+                }
+                // The message is queued before the listener wakes.
+                let _ = notifier.notify();
+            }
+        })?;
+    ready_rx
+        .recv()
+        .map_err(|_| "wake relay died".to_string())??;
+    Ok(rx)
 }

@@ -17,7 +17,7 @@ use swarmrt_hosts::wire::{Down, Up};
 use swarmrt_hosts::world_side::{Heard, HostTraffic, WorldLink};
 use swarmrt_protocol::control::{Control, WorldReport};
 use swarmrt_protocol::ipc::{self, IpcError};
-use swarmrt_protocol::services::{EVENT_CONTROL, RunServices};
+use swarmrt_protocol::services::RunServices;
 use swarmrt_protocol::{
     Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION, RobotState,
 };
@@ -75,8 +75,7 @@ struct Remote {
 impl Remote {
     fn open(run: &RunServices, hosts: &HostsFile, layout: u32) -> Result<Remote, IpcError> {
         let (link, heard) = WorldLink::open(hosts, run.run_id())?;
-        let heard =
-            swarmrt_hosts::link::wake_relay(run, format!("{}-link", run.world_node_name()), heard)?;
+        let heard = ipc::wake_relay(run, format!("{}-link", run.world_node_name()), heard)?;
         let n = hosts.hosts.len();
         Ok(Remote {
             link,
@@ -255,44 +254,24 @@ fn report(r: &WorldReport) {
 }
 
 /// Relays control lines from stdin to the main loop and wakes it through the command event.
-fn spawn_control_thread(run: RunServices) -> Receiver<Control> {
+fn spawn_control_thread(run: &RunServices) -> Result<Receiver<Control>, IpcError> {
     let (tx, rx) = crossbeam_channel::unbounded();
     std::thread::spawn(move || {
-        let wake =
-            ipc::node(&run, &format!("{}-control", run.world_node_name())).and_then(|node| {
-                let ev = ipc::open_commands_event(&node, &run)?;
-                let n = ev
-                    .notifier_builder()
-                    .default_event_id(EventId::new(EVENT_CONTROL))
-                    .create()?;
-                Ok((node, n))
-            });
-        let (_node, notifier) = match wake {
-            Ok(x) => x,
-            Err(e) => {
-                tracing::error!("control thread cannot reach the world: {e}");
-                let _ = tx.send(Control::Stop);
-                return;
-            }
-        };
-        let stdin = std::io::stdin();
-        for line in stdin.lock().lines() {
+        for line in std::io::stdin().lock().lines() {
             let Ok(line) = line else { break };
             match serde_json::from_str::<Control>(&line) {
                 Ok(c) => {
                     if tx.send(c).is_err() {
                         return;
                     }
-                    let _ = notifier.notify();
                 }
                 Err(e) => tracing::warn!("ignoring control line {line:?}: {e}"),
             }
         }
         // EOF: the orchestrator is gone; finish the records and stop.
         let _ = tx.send(Control::Stop);
-        let _ = notifier.notify();
     });
-    rx
+    ipc::wake_relay(run, format!("{}-control", run.world_node_name()), rx)
 }
 
 /// Runs the world of `run` with `cfg`, writing records into `out_dir`. With `hosts`, the
@@ -334,7 +313,7 @@ pub fn run(
         &services.commands_event,
         n,
     )?;
-    let control = spawn_control_thread(run.clone());
+    let control = spawn_control_thread(run)?;
     let mut remote = match hosts {
         Some((file, layout)) => Some(Remote::open(run, file, layout)?),
         None => None,

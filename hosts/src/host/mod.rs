@@ -194,7 +194,7 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
     )?;
 
     let (raw_tx, raw_rx) = crossbeam_channel::unbounded::<Msg>();
-    let rx = link::wake_relay(&run, format!("swarmrt-{}-host-relay", args.run_id), raw_rx)?;
+    let rx = ipc::wake_relay(&run, format!("swarmrt-{}-host-relay", args.run_id), raw_rx)?;
     {
         let tx = raw_tx.clone();
         std::thread::spawn(move || {
