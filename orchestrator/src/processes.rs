@@ -497,17 +497,9 @@ fn supervise(
             {
                 let r = remotes.as_mut().expect("checked");
                 let host = r.by_pid(pid).expect("checked");
-                if let Some(why) = r.ended(host, &how) {
-                    lose_host(
-                        r,
-                        host,
-                        &why,
-                        ready,
-                        &mut startup_failure,
-                        &mut outcome,
-                        &mut world_stdin,
-                    );
-                }
+                let why = r.ended(host, &how);
+                let failure = &mut startup_failure;
+                lose_host(r, host, why, ready, failure, &mut outcome, &mut world_stdin);
             }
             Msg::Exited { pid, how } => {
                 if pid == world_pid {
@@ -528,18 +520,10 @@ fn supervise(
                 {
                     robot_ended(robot, &how, ordered, &mut outcome, &mut world_stdin);
                 }
-                if let HostReport::Failed { .. } = report
-                    && let Some(why) = r.lost(host).map(str::to_string)
-                {
-                    lose_host(
-                        r,
-                        host,
-                        &why,
-                        ready,
-                        &mut startup_failure,
-                        &mut outcome,
-                        &mut world_stdin,
-                    );
+                if let HostReport::Failed { .. } = report {
+                    let why = r.lost(host).map(str::to_string);
+                    let failure = &mut startup_failure;
+                    lose_host(r, host, why, ready, failure, &mut outcome, &mut world_stdin);
                 }
             }
             Msg::Host(_, HostMsg::Eof) => {}
@@ -723,17 +707,18 @@ fn remote_order(r: &WorldReport) -> Option<(u32, HostControl)> {
     })
 }
 
-/// A host is gone (`why`): before tick 0 that fails the run; afterwards its robots are dead
-/// from now on, an unscheduled death each.
+/// A host is gone (`why`; `None` when it had finished or was lost already): before tick 0
+/// that fails the run; afterwards its robots are dead from now on, an unscheduled death each.
 fn lose_host(
     r: &mut Remotes,
     host: usize,
-    why: &str,
+    why: Option<String>,
     ready: bool,
     startup_failure: &mut Option<crate::hosts::HostFailure>,
     outcome: &mut ProcessOutcome,
     world_stdin: &mut Option<ChildStdin>,
 ) {
+    let Some(why) = why else { return };
     if !ready {
         startup_failure.get_or_insert(crate::hosts::HostFailure {
             host: r.name(host).to_string(),

@@ -305,20 +305,27 @@ fn bad_or_unreachable_hosts_fail_fast_with_their_name() {
         &[2, 2],
         &format!("connect = \"tcp/{}:7999\"\n", lab.addr(0)),
     );
+    // Runs flocking with `hosts`; returns the error output of a run that must fail with
+    // exit 2 and leave nothing on any host.
+    let fails = |hosts: &Path, out: &str| -> String {
+        let o = run_on_host0(
+            &lab,
+            &[
+                "run",
+                "configs/flocking_crossing.toml",
+                "--hosts",
+                hosts.to_str().unwrap(),
+                "--out",
+                tmp.path().join(out).to_str().unwrap(),
+            ],
+        );
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_hosts_clean(&lab);
+        err
+    };
     let started = Instant::now();
-    let o = run_on_host0(
-        &lab,
-        &[
-            "run",
-            "configs/flocking_crossing.toml",
-            "--hosts",
-            bad.to_str().unwrap(),
-            "--out",
-            tmp.path().join("a").to_str().unwrap(),
-        ],
-    );
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let err = fails(&bad, "a");
     let line = err
         .lines()
         .find(|l| l.starts_with("error:"))
@@ -328,7 +335,6 @@ fn bad_or_unreachable_hosts_fail_fast_with_their_name() {
         "{err}"
     );
     assert!(started.elapsed() < Duration::from_secs(60));
-    assert_hosts_clean(&lab);
 
     // A launcher that does not exist.
     let text =
@@ -336,24 +342,11 @@ fn bad_or_unreachable_hosts_fail_fast_with_their_name() {
             .unwrap()
             .replacen("\"nsenter\"", "\"/nonexistent/ssh\"", 1);
     std::fs::write(&bad, text).unwrap();
-    let o = run_on_host0(
-        &lab,
-        &[
-            "run",
-            "configs/flocking_crossing.toml",
-            "--hosts",
-            bad.to_str().unwrap(),
-            "--out",
-            tmp.path().join("b").to_str().unwrap(),
-        ],
-    );
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let err = fails(&bad, "b");
     assert!(
         err.contains("hosts.toml")
             && err.contains("host[0].launcher")
             && err.contains("/nonexistent/ssh"),
         "{err}"
     );
-    assert_hosts_clean(&lab);
 }
