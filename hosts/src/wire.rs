@@ -256,6 +256,20 @@ fn get_command(r: &mut R) -> Result<Command, Malformed> {
     Ok(c)
 }
 
+/// The bytes of a [`Down::Tick`], straight from the world's slots (no copy of them first).
+pub fn encode_tick(tick: u64, expect: &[u32], slots: &[Observation]) -> Vec<u8> {
+    let mut w = W(Vec::with_capacity(
+        32 + 4 * expect.len() + 400 * slots.len(),
+    ));
+    w.u8(DOWN_TICK);
+    w.u64(tick);
+    w.u32(expect.len() as u32);
+    expect.iter().for_each(|&r| w.u32(r));
+    w.u32(slots.len() as u32);
+    slots.iter().for_each(|o| put_observation(&mut w, o));
+    w.0
+}
+
 impl Down {
     /// The message as bytes.
     pub fn encode(&self) -> Vec<u8> {
@@ -270,15 +284,7 @@ impl Down {
                 tick,
                 expect,
                 slots,
-            } => {
-                w.0.reserve(32 + 4 * expect.len() + 400 * slots.len());
-                w.u8(DOWN_TICK);
-                w.u64(*tick);
-                w.u32(expect.len() as u32);
-                expect.iter().for_each(|&r| w.u32(r));
-                w.u32(slots.len() as u32);
-                slots.iter().for_each(|o| put_observation(&mut w, o));
-            }
+            } => return encode_tick(*tick, expect, slots),
             Down::Shutdown { tick } => {
                 w.u8(DOWN_SHUTDOWN);
                 w.u64(*tick);

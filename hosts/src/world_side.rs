@@ -171,7 +171,11 @@ impl WorldLink {
     /// Sends `msg` to host `host` (blocking while its link is congested: lock-step needs every
     /// slot delivered).
     pub fn send(&mut self, host: usize, msg: &Down) -> Result<(), LinkError> {
-        let bytes = msg.encode();
+        self.send_bytes(host, msg.encode())
+    }
+
+    /// Sends an encoded [`Down`] (e.g. from [`crate::wire::encode_tick`]) to host `host`.
+    pub fn send_bytes(&mut self, host: usize, bytes: Vec<u8>) -> Result<(), LinkError> {
         self.traffic[host].bytes_down += bytes.len() as u64;
         self.traffic[host].messages_down += 1;
         self.hosts[host].down.put(bytes).wait()?;

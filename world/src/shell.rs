@@ -13,7 +13,7 @@ use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use swarmrt_hosts::HostsFile;
-use swarmrt_hosts::wire::{Down, Up};
+use swarmrt_hosts::wire::{Down, Up, encode_tick};
 use swarmrt_hosts::world_side::{Heard, HostTraffic, WorldLink};
 use swarmrt_protocol::control::{Control, WorldReport};
 use swarmrt_protocol::ipc::{self, IpcError};
@@ -101,12 +101,9 @@ impl Remote {
                 continue;
             }
             let r = self.link.robots(i);
-            let msg = Down::Tick {
-                tick,
-                expect: waiting.range(r.clone()).copied().collect(),
-                slots: obs[r.start as usize..r.end as usize].to_vec(),
-            };
-            self.link.send(i, &msg)?;
+            let expect: Vec<u32> = waiting.range(r.clone()).copied().collect();
+            let bytes = encode_tick(tick, &expect, &obs[r.start as usize..r.end as usize]);
+            self.link.send_bytes(i, bytes)?;
         }
         Ok(())
     }
