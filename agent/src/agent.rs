@@ -79,6 +79,10 @@ impl Agent {
                 // such as a granted vote must never be taken for one's own).
                 continue;
             }
+            if f.opaque_bytes().is_some() {
+                // Raw bytes between robots of another kind (e.g. foreign controllers).
+                continue;
+            }
             let Some(msg) = RadioMsg::decode(f.bytes()) else {
                 self.malformed += 1;
                 continue;

@@ -50,7 +50,7 @@ pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
         tracing::warn!("cannot raise the open-file limit: {e}");
     }
     let node = bench_node(run, &run.world_node_name())?;
-    let s = proto_ipc::create_services(&node, run, n, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let s = proto_ipc::create_services(&node, run, n, 0, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
     let WorldPorts {
         publisher,
         notifier,

@@ -195,6 +195,7 @@ pub fn world_ports(
         commands,
         commands_event,
         slots,
+        0,
     )
     .map_err(|e| anyhow::anyhow!("world ports: {e}"))
 }

@@ -173,8 +173,8 @@ pub fn subscriber(run: &RunServices, mode: LossMode, work_us: u64) -> anyhow::Re
             }
         }
         LossMode::RuntimeFree | LossMode::RuntimeLockStep => {
-            let s =
-                proto_ipc::create_services(&node, run, 1, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let s = proto_ipc::create_services(&node, run, 1, 0, 0)
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
             let RobotPorts {
                 subscriber: sub,
                 listener,

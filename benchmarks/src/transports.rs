@@ -604,7 +604,8 @@ pub fn path_world(run: &RunServices, runtime: bool, secs: f64) -> anyhow::Result
     let deadline = Duration::from_secs_f64(secs.max(0.01));
     let mut rtts = Vec::new();
     if runtime {
-        let s = proto_ipc::create_services(&node, run, 1, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let s =
+            proto_ipc::create_services(&node, run, 1, 0, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
         let WorldPorts {
             publisher,
             notifier,

@@ -67,6 +67,10 @@ pub struct RunArgs {
     /// Run the robots a hosts file names on other hosts, over Zenoh (docs/multihost.md).
     #[arg(long, value_name = "HOSTS.TOML", conflicts_with = "in_process")]
     pub hosts: Option<PathBuf>,
+    /// Tick by the wall clock (one tick every scenario.dt seconds) and apply whatever
+    /// commands arrived; a robot that missed a tick keeps its last command. Not reproducible.
+    #[arg(long, conflicts_with = "in_process")]
+    pub realtime: bool,
 }
 
 /// `swarm check`.

@@ -179,22 +179,33 @@ pub fn run(
     interrupt: Receiver<()>,
     progress: impl FnMut(u64),
 ) -> anyhow::Result<ProcessOutcome> {
-    run_on_hosts(cfg, config_path, dir, None, interrupt, progress)
+    let opts = RunOptions::default();
+    run_on_hosts(cfg, config_path, dir, &opts, interrupt, progress)
 }
 
-/// [`run`], with the robots `hosts` names on other hosts (`swarm run --hosts`).
+/// How a multi-process run differs from the default lock-step run on one host.
+#[derive(Debug, Default)]
+pub struct RunOptions<'a> {
+    /// The robots a hosts file names run on other hosts (`swarm run --hosts`).
+    pub hosts: Option<&'a RunHosts>,
+    /// The world ticks by the wall clock and applies whatever commands arrived
+    /// (`swarm run --realtime`).
+    pub realtime: bool,
+}
+
+/// [`run`] with `opts`.
 pub fn run_on_hosts(
     cfg: &Config,
     config_path: &Path,
     dir: &Path,
-    hosts: Option<&RunHosts>,
+    opts: &RunOptions,
     interrupt: Receiver<()>,
     mut progress: impl FnMut(u64),
 ) -> anyhow::Result<ProcessOutcome> {
     let run_id = new_run_id();
     let run = RunServices::new(&run_id);
     cleanup::claim(&run_id).context("cannot create the run's iceoryx2 directory")?;
-    let result = supervise(cfg, config_path, dir, hosts, &run, interrupt, &mut progress);
+    let result = supervise(cfg, config_path, dir, opts, &run, interrupt, &mut progress);
     let removed = cleanup::remove_run(&run_id);
     tracing::debug!(run_id, removed, "run resources removed");
     result.map(|mut o| {
@@ -207,13 +218,19 @@ fn supervise(
     cfg: &Config,
     config_path: &Path,
     dir: &Path,
-    hosts: Option<&RunHosts>,
+    opts: &RunOptions,
     run: &RunServices,
     interrupt: Receiver<()>,
     progress: &mut impl FnMut(u64),
 ) -> anyhow::Result<ProcessOutcome> {
+    let hosts = opts.hosts;
     let world_bin = sibling_binary("swarm-world")?;
     let agent_bin = sibling_binary("swarm-agent")?;
+    // iceoryx2's tools read `config/iceoryx2.toml` from their working directory, so
+    // `cd <run dir> && iox2 service list` sees this run; robot programs load it too.
+    let ipc_config = dir.join(crate::run_dir::IPC_CONFIG);
+    swarmrt_protocol::ipc::write_config_file(run, &ipc_config)
+        .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", ipc_config.display()))?;
     let n = cfg.robots.count;
     let mut outcome = ProcessOutcome::default();
     let (tx, rx) = crossbeam_channel::unbounded::<Msg>();
@@ -251,6 +268,9 @@ fn supervise(
         .arg(dir);
     if let Some(h) = hosts {
         world_cmd.arg("--hosts").arg(&h.path);
+    }
+    if opts.realtime {
+        world_cmd.arg("--realtime");
     }
     let mut world = world_cmd
         .stdin(Stdio::piped())
@@ -336,7 +356,17 @@ fn supervise(
     // Stable storage of the robots' persistent Raft state, for restarts (`consensus.storage`).
     let storage = dir.join(crate::run_dir::STORAGE_DIR);
     let spawn_robot = |id: u32, incarnation: u32| {
-        child_command(&agent_bin)
+        // A robot program gets swarm-agent's arguments after its own, and the run's names
+        // in its environment (docs/robot-interface.md).
+        let mut cmd = match swarmrt_scenario::program::program_of(cfg, id) {
+            None => child_command(&agent_bin),
+            Some((_, argv)) => {
+                let mut c = child_command(Path::new(&argv[0]));
+                c.args(&argv[1..]);
+                c
+            }
+        };
+        cmd.envs(run.robot_env(id, incarnation, config_path, &storage, 0, &ipc_config))
             .args([
                 "--run-id",
                 run.run_id(),

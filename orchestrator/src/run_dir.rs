@@ -87,6 +87,11 @@ impl DirLock {
 /// The subdirectory of a run directory that holds the robots' stable storage (their
 /// persistent Raft state, `consensus.storage`).
 pub const STORAGE_DIR: &str = "storage";
+/// The run's iceoryx2 config, where iceoryx2's tools look for it from the run directory
+/// (`config/iceoryx2.toml`).
+pub const IPC_CONFIG: &str = "config/iceoryx2.toml";
+/// The subdirectory holding [`IPC_CONFIG`].
+const IPC_CONFIG_DIR: &str = "config";
 
 /// Claims `dir` for a run: creates it, takes its lock, then looks at what it holds. In this
 /// order two runs started at the same instant cannot both pass: whoever takes the lock second
@@ -96,7 +101,7 @@ pub const STORAGE_DIR: &str = "storage";
 /// - holding anything but the lock file: refused unless `force`;
 /// - with `force`: the earlier run's files are removed first (the lock is kept). Only a run
 ///   directory is cleared: one that holds a `config.toml` and no subdirectory but its own
-///   [`STORAGE_DIR`], so `--force --out ~` cannot wipe a home directory or a sweep.
+///   [`STORAGE_DIR`] and `config/`, so `--force --out ~` cannot wipe a home directory or a sweep.
 pub fn claim(dir: &Path, force: bool) -> SwarmResult<DirLock> {
     let mut lock = lock(dir)?;
     let shown = dir.display();
@@ -128,11 +133,13 @@ pub fn claim(dir: &Path, force: bool) -> SwarmResult<DirLock> {
         )));
     }
     let run_like = held.iter().any(|(n, _)| n == "config.toml")
-        && held.iter().all(|(n, d)| !*d || n == STORAGE_DIR);
+        && held
+            .iter()
+            .all(|(n, d)| !*d || n == STORAGE_DIR || n == IPC_CONFIG_DIR);
     if !run_like {
         return Err(SwarmError::User(format!(
             "--out {shown}: --force replaces only a run directory (a config.toml and no \
-             subdirectories but its own storage/), and this holds {names}{more}; choose another directory"
+             subdirectories but its own storage/ and config/), and this holds {names}{more}; choose another directory"
         )));
     }
     for (name, is_dir) in &held {

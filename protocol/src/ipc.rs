@@ -43,6 +43,18 @@ pub fn ipc_config(run: &RunServices) -> Result<Config, IpcError> {
     Ok(cfg)
 }
 
+/// Writes the run's iceoryx2 config as an `iceoryx2.toml` at `path`: iceoryx2's own tools
+/// (`iox2 service list`, `hz`, `subscribe`, `record`) read `config/iceoryx2.toml` from their
+/// working directory, and a robot in another language loads it as its node's config.
+pub fn write_config_file(run: &RunServices, path: &std::path::Path) -> Result<(), IpcError> {
+    let text = toml::to_string(&ipc_config(run)?)?;
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::write(path, text)?;
+    Ok(())
+}
+
 /// Raises this process's soft open-file limit to its hard limit. The world holds about five
 /// descriptors per robot (the robot's command segment and connection, its observation
 /// connection, its event socket), which passes the common soft limit of 1,024 near 200
@@ -111,21 +123,24 @@ pub struct WorldServices {
 
 /// Creates the run's services for `robots` robots. Extra ports leave room for the world's
 /// control thread and for the fresh processes of up to `restarts` restarted robots whose old
-/// ports are not yet reclaimed.
+/// ports are not yet reclaimed; `observers` spare subscriber and listener slots (and nodes)
+/// let a tool, recorder or viewer attach read-only mid-run (`ipc.observers`).
 pub fn create_services(
     node: &Node<Svc>,
     run: &RunServices,
     robots: usize,
     restarts: usize,
+    observers: usize,
 ) -> Result<WorldServices, IpcError> {
     let n = robots + 8 + restarts;
+    let o = observers;
     let observations = node
         .service_builder(&service_name(&run.observations())?)
         .publish_subscribe::<[Observation]>()
         .user_header::<ObservationHeader>()
         .max_publishers(1)
-        .max_subscribers(n)
-        .max_nodes(n + 2)
+        .max_subscribers(n + o)
+        .max_nodes(n + 2 + o)
         .subscriber_max_buffer_size(1)
         .subscriber_max_borrowed_samples(1)
         .history_size(0)
@@ -135,15 +150,15 @@ pub fn create_services(
         .service_builder(&service_name(&run.observations())?)
         .event()
         .max_notifiers(2)
-        .max_listeners(n)
-        .max_nodes(n + 2)
+        .max_listeners(n + o)
+        .max_nodes(n + 2 + o)
         .create()?;
     let commands = node
         .service_builder(&service_name(&run.commands())?)
         .publish_subscribe::<Command>()
         .max_publishers(n)
-        .max_subscribers(1)
-        .max_nodes(n + 2)
+        .max_subscribers(1 + o)
+        .max_nodes(n + 2 + o)
         .subscriber_max_buffer_size(2)
         .subscriber_max_borrowed_samples(1)
         .history_size(0)
@@ -153,8 +168,8 @@ pub fn create_services(
         .service_builder(&service_name(&run.commands())?)
         .event()
         .max_notifiers(n + 2)
-        .max_listeners(2)
-        .max_nodes(n + 2)
+        .max_listeners(2 + o)
+        .max_nodes(n + 2 + o)
         .create()?;
     Ok(WorldServices {
         observations,
@@ -222,19 +237,21 @@ pub struct WorldPorts {
 
 impl WorldPorts {
     /// Opens the world's ports on the four services (as created by [`create_services`], or
-    /// opened by a benchmark that plays the world), for `slots` robots.
+    /// opened by a benchmark that plays the world), for `slots` robots and `observers`
+    /// read-only subscribers (each may hold two samples: one queued, one borrowed).
     pub fn open(
         observations: &ObservationService,
         observations_event: &EventService,
         commands: &CommandService,
         commands_event: &EventService,
         slots: usize,
+        observers: usize,
     ) -> Result<WorldPorts, IpcError> {
         Ok(WorldPorts {
             publisher: observations
                 .publisher_builder()
                 .initial_max_slice_len(slots)
-                .override_sample_preallocation(|_| OBSERVATION_SAMPLES)
+                .override_sample_preallocation(move |_| OBSERVATION_SAMPLES + 2 * observers)
                 .create()?,
             notifier: observations_event.notifier_builder().create()?,
             commands: commands.subscriber_builder().create()?,

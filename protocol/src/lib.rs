@@ -25,6 +25,7 @@
 pub mod cleanup;
 pub mod control;
 pub mod ipc;
+pub mod layout;
 pub mod messages;
 pub mod records;
 pub mod services;

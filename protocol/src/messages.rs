@@ -22,6 +22,11 @@ pub const MAX_NEIGHBOURS: usize = 32;
 pub const MAX_REPORT: usize = 256;
 /// Destination id of a broadcast frame.
 pub const BROADCAST: u32 = u32::MAX;
+/// First payload byte of an opaque frame: the rest is raw bytes that robots of one kind
+/// (e.g. foreign controllers) exchange without postcard. The world routes it like any frame;
+/// Rust robots skip it. No postcard message starts with it (an enum tag of 255 would need
+/// a second varint byte and more than 127 variants).
+pub const OPAQUE_TAG: u8 = 0xff;
 
 /// One radio frame: sender, destination (or [`BROADCAST`]) and a postcard-encoded payload.
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
@@ -53,6 +58,29 @@ impl Frame {
     /// The valid payload bytes (clamped, so a malformed `len` cannot read past the array).
     pub fn bytes(&self) -> &[u8] {
         &self.payload[..(self.len as usize).min(MAX_PAYLOAD)]
+    }
+
+    /// An opaque frame to `dst` carrying `bytes` (at most `MAX_PAYLOAD - 1`).
+    pub fn opaque(dst: u32, bytes: &[u8]) -> Result<Frame, PushError> {
+        if bytes.len() >= MAX_PAYLOAD {
+            return Err(PushError::TooLarge);
+        }
+        let mut f = Frame {
+            dst,
+            len: bytes.len() as u16 + 1,
+            ..Frame::EMPTY
+        };
+        f.payload[0] = OPAQUE_TAG;
+        f.payload[1..=bytes.len()].copy_from_slice(bytes);
+        Ok(f)
+    }
+
+    /// The raw bytes of an opaque frame, `None` for a postcard message.
+    pub fn opaque_bytes(&self) -> Option<&[u8]> {
+        match self.bytes() {
+            [OPAQUE_TAG, rest @ ..] => Some(rest),
+            _ => None,
+        }
     }
 }
 
@@ -435,5 +463,15 @@ mod tests {
         let mut f = Frame::EMPTY;
         f.len = 999;
         assert_eq!(f.bytes().len(), MAX_PAYLOAD);
+    }
+
+    #[test]
+    fn opaque_frames_carry_raw_bytes_no_message_starts_like_them() {
+        let f = Frame::opaque(BROADCAST, b"hi").unwrap();
+        assert_eq!(f.opaque_bytes(), Some(&b"hi"[..]));
+        assert!(Frame::opaque(0, &[0; MAX_PAYLOAD]).is_err());
+        let mut cmd = Command::act(0, 0);
+        cmd.push_frame(BROADCAST, &(1u8, 2.0f64)).unwrap();
+        assert_eq!(cmd.outbox()[0].opaque_bytes(), None);
     }
 }

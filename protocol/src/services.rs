@@ -21,6 +21,37 @@ pub const EVENT_COMMAND: usize = 1;
 /// Event id the world's control thread uses to wake the world's main loop.
 pub const EVENT_CONTROL: usize = 2;
 
+/// What a robot program finds in its environment, beside the arguments `swarm-agent` gets
+/// (`--run-id --robot --incarnation --config --storage [--slot-offset]`), so a controller in
+/// any language can join without parsing them (docs/robot-interface.md).
+pub mod env {
+    /// The run id (lower-case hex).
+    pub const RUN_ID: &str = "SWARMRT_RUN_ID";
+    /// This robot's id.
+    pub const ROBOT: &str = "SWARMRT_ROBOT";
+    /// Scheduled restarts of this robot before this process (0 for its first process).
+    pub const INCARNATION: &str = "SWARMRT_INCARNATION";
+    /// The run's resolved config (TOML), every key present.
+    pub const CONFIG: &str = "SWARMRT_CONFIG";
+    /// A directory for state that must survive a scheduled restart.
+    pub const STORAGE: &str = "SWARMRT_STORAGE";
+    /// Index of this robot's slot in the observation sample is `robot - SLOT_OFFSET`.
+    pub const SLOT_OFFSET: &str = "SWARMRT_SLOT_OFFSET";
+    /// The run's iceoryx2 root directory.
+    pub const IPC_ROOT: &str = "SWARMRT_IPC_ROOT";
+    /// The run's iceoryx2 shared-memory prefix.
+    pub const IPC_PREFIX: &str = "SWARMRT_IPC_PREFIX";
+    /// An `iceoryx2.toml` holding the run's root, prefix and settings (load it as the node's
+    /// config).
+    pub const IPC_CONFIG: &str = "SWARMRT_IPC_CONFIG";
+    /// Name of the observation service (and of the event service beside it).
+    pub const OBSERVATIONS: &str = "SWARMRT_OBSERVATIONS";
+    /// Name of the command service (and of the event service beside it).
+    pub const COMMANDS: &str = "SWARMRT_COMMANDS";
+    /// The node name this robot should use (so `iox2 node list` shows who is who).
+    pub const NODE_NAME: &str = "SWARMRT_NODE_NAME";
+}
+
 /// The names belonging to one run.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RunServices {
@@ -63,6 +94,33 @@ impl RunServices {
     /// Node name of robot `id`, so logs and `iox2 node list` show who is who.
     pub fn robot_node_name(&self, id: u32) -> String {
         format!("swarmrt-{}-robot-{id}", self.run_id)
+    }
+
+    /// The environment of robot `id`'s program (see [`env`]); `ipc_config` is the path of
+    /// the run's `iceoryx2.toml` on the robot's host.
+    pub fn robot_env(
+        &self,
+        id: u32,
+        incarnation: u32,
+        config: &std::path::Path,
+        storage: &std::path::Path,
+        slot_offset: u32,
+        ipc_config: &std::path::Path,
+    ) -> Vec<(&'static str, std::ffi::OsString)> {
+        vec![
+            (env::RUN_ID, self.run_id.clone().into()),
+            (env::ROBOT, id.to_string().into()),
+            (env::INCARNATION, incarnation.to_string().into()),
+            (env::CONFIG, config.as_os_str().to_owned()),
+            (env::STORAGE, storage.as_os_str().to_owned()),
+            (env::SLOT_OFFSET, slot_offset.to_string().into()),
+            (env::IPC_ROOT, self.ipc_root().into_os_string()),
+            (env::IPC_PREFIX, self.shm_prefix().into()),
+            (env::IPC_CONFIG, ipc_config.as_os_str().to_owned()),
+            (env::OBSERVATIONS, self.observations().into()),
+            (env::COMMANDS, self.commands().into()),
+            (env::NODE_NAME, self.robot_node_name(id).into()),
+        ]
     }
 
     /// Node name of the world process.

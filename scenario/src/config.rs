@@ -37,6 +37,31 @@ pub struct Config {
     /// Consensus among the robots (none when absent).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub consensus: Option<ConsensusConfig>,
+    /// The iceoryx2 transport; left out of the resolved config while it has its defaults (it
+    /// changes no record).
+    #[serde(default, skip_serializing_if = "IpcConfig::is_default")]
+    pub ipc: IpcConfig,
+}
+
+/// `[ipc]`: how the run's iceoryx2 services are sized beyond the robots.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct IpcConfig {
+    /// Spare read-only subscriber and listener slots on every service, so a tool
+    /// (`iox2 service hz`, a recorder, a viewer) can attach to a live run.
+    pub observers: u32,
+}
+
+impl Default for IpcConfig {
+    fn default() -> Self {
+        IpcConfig { observers: 2 }
+    }
+}
+
+impl IpcConfig {
+    fn is_default(&self) -> bool {
+        *self == IpcConfig::default()
+    }
 }
 
 /// `[scenario]`.
@@ -184,6 +209,14 @@ pub struct RobotsConfig {
     /// frame, 3D contacts; absent for ground robots (unicycles in the plane).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub aerial: Option<AerialConfig>,
+    /// The command line every robot runs instead of the built-in `swarm-agent` (its
+    /// arguments are appended): a controller in any language (docs/robot-interface.md).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub program: Vec<String>,
+    /// Programs for one robot or a range of them; later entries win
+    /// (`program = ["swarm-agent"]` puts the built-in robot back).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub programs: Vec<crate::program::ProgramFor>,
 }
 
 /// `[robots.aerial]`: what makes robots aerial. Their horizontal speed is limited by

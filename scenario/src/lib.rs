@@ -33,6 +33,7 @@ pub mod faults;
 pub mod layout;
 pub mod overrides;
 pub mod process;
+pub mod program;
 pub mod rng;
 pub mod validate;
 

@@ -89,6 +89,8 @@ impl Config {
 
         let r = &self.robots;
         range_u64("robots.count", r.count as u64, 1, MAX_ROBOTS as u64)?;
+        crate::program::validate(self)?;
+        range_u64("ipc.observers", self.ipc.observers as u64, 0, 64)?;
         range_f("robots.radius", r.radius, 1e-3, 100.0)?;
         range_f("robots.max_speed", r.max_speed, 0.0, 1000.0)?;
         range_f("robots.max_turn_rate", r.max_turn_rate, 0.0, 1000.0)?;

@@ -297,7 +297,8 @@ pub fn run(
         Err(e) => tracing::warn!("cannot raise the open-file limit: {e}"),
     }
     let node = ipc::node(run, &run.world_node_name())?;
-    let services = ipc::create_services(&node, run, n, cfg.faults.restart.len())?;
+    let observers = cfg.ipc.observers as usize;
+    let services = ipc::create_services(&node, run, n, cfg.faults.restart.len(), observers)?;
     let ipc::WorldPorts {
         publisher,
         notifier: obs_notifier,
@@ -309,6 +310,7 @@ pub fn run(
         &services.commands,
         &services.commands_event,
         n,
+        observers,
     )?;
     let control = spawn_control_thread(run)?;
     let mut remote = match hosts {

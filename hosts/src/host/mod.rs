@@ -184,13 +184,15 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
         .ok_or("cannot find swarm-agent beside swarm-host")?;
     let _ = ipc::raise_fd_limit();
     let node = ipc::node(&run, &format!("swarmrt-{}-host", args.run_id))?;
-    let services = ipc::create_services(&node, &run, count, cfg.faults.restart.len())?;
+    let observers = cfg.ipc.observers as usize;
+    let services = ipc::create_services(&node, &run, count, cfg.faults.restart.len(), observers)?;
     let ports = ipc::WorldPorts::open(
         &services.observations,
         &services.observations_event,
         &services.commands,
         &services.commands_event,
         count,
+        observers,
     )?;
 
     let (raw_tx, raw_rx) = crossbeam_channel::unbounded::<Msg>();

@@ -41,6 +41,9 @@ pub fn run(
         set.push(format!("scenario.ticks={ticks}"));
     }
     let cfg = load_config(&args.config, &set)?;
+    if args.in_process {
+        crate::config::refuse_foreign_in_process(&cfg, &args.config, "--in-process")?;
+    }
     // The directory is locked for the whole run (`_lock` lives until this returns): a second
     // run into it is refused, and so is an earlier run's directory unless --force.
     let (dir, _lock) = match &args.out {
@@ -73,7 +76,13 @@ pub fn run(
     let mut metrics = json!({
         "scenario": cfg.scenario.name,
         "seed": cfg.scenario.seed,
-        "mode": if args.in_process { "in-process" } else { "processes" },
+        "mode": if args.in_process {
+            "in-process"
+        } else if args.realtime {
+            "realtime"
+        } else {
+            "processes"
+        },
         "agents": cfg.robots.count,
     });
 
@@ -101,14 +110,13 @@ pub fn run(
         metrics["reproducible"] = json!(!interrupted);
         failure = None;
     } else {
-        let out = match processes::run_on_hosts(
-            &cfg,
-            &config_path,
-            &dir,
-            hosts.as_ref(),
-            interrupt,
-            |t| pb.set_position(t),
-        ) {
+        let opts = processes::RunOptions {
+            hosts: hosts.as_ref(),
+            realtime: args.realtime,
+        };
+        let out = match processes::run_on_hosts(&cfg, &config_path, &dir, &opts, interrupt, |t| {
+            pb.set_position(t)
+        }) {
             Ok(out) => out,
             Err(e) => {
                 pb.finish_and_clear();
@@ -138,8 +146,12 @@ pub fn run(
                 .collect::<Vec<_>>()
         );
         // An unscheduled death happens at a wall-clock moment: the run cannot be replayed.
+        // A real-time run applies whatever arrived by the wall clock: never replayable.
         metrics["reproducible"] = json!(
-            out.unscheduled_deaths.is_empty() && out.world_failure.is_none() && !out.interrupted
+            out.unscheduled_deaths.is_empty()
+                && out.world_failure.is_none()
+                && !out.interrupted
+                && !args.realtime
         );
         failure = out.world_failure;
     }
