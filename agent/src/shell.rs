@@ -22,7 +22,8 @@ const IDLE_CHECK: Duration = Duration::from_millis(500);
 /// (claims another robot's id), `double` (answers every tick twice), `bad-frame` (an outbox
 /// length past the maximum), `oversized-frame` (a frame length past the payload size),
 /// `garbage-frame` (a payload that is no message), `frame-to-nobody` (a unicast to an unknown
-/// robot), `garbage-notes` (a report that does not decode) or `panic` (panics at tick 20).
+/// robot), `garbage-notes` (a report that does not decode), `panic` (panics at tick 20) or
+/// `slow` (thinks 250 ms per tick, for `--realtime` runs).
 pub const MISBEHAVE_ENV: &str = "SWARMRT_TEST_MISBEHAVE";
 
 /// How a misbehaving robot corrupts its commands.
@@ -41,6 +42,7 @@ enum Misbehave {
     FrameToNobody,
     GarbageNotes,
     Panic,
+    Slow,
 }
 
 fn misbehave_for(id: u32) -> Option<Misbehave> {
@@ -63,6 +65,7 @@ fn misbehave_for(id: u32) -> Option<Misbehave> {
         "frame-to-nobody" => Some(Misbehave::FrameToNobody),
         "garbage-notes" => Some(Misbehave::GarbageNotes),
         "panic" => Some(Misbehave::Panic),
+        "slow" => Some(Misbehave::Slow),
         _ => None,
     }
 }
@@ -195,6 +198,7 @@ pub fn run(
                 Some(Misbehave::Double) => {
                     ports.publisher.send_copy(cmd)?;
                 }
+                Some(Misbehave::Slow) => std::thread::sleep(Duration::from_millis(250)),
                 Some(Misbehave::Panic) | None => {}
             }
             ports.send(cmd)?;

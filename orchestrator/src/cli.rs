@@ -69,7 +69,7 @@ pub struct RunArgs {
     pub hosts: Option<PathBuf>,
     /// Tick by the wall clock (one tick every scenario.dt seconds) and apply whatever
     /// commands arrived; a robot that missed a tick keeps its last command. Not reproducible.
-    #[arg(long, conflicts_with = "in_process")]
+    #[arg(long, conflicts_with_all = ["in_process", "hosts"])]
     pub realtime: bool,
 }
 

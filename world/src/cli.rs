@@ -20,6 +20,10 @@ struct Args {
     /// The run's hosts.toml: the robots it names run on other hosts, reached over Zenoh.
     #[arg(long)]
     hosts: Option<std::path::PathBuf>,
+    /// Tick by the wall clock, one tick every `scenario.dt`, applying whatever commands
+    /// arrived; a robot that missed the tick keeps its last command.
+    #[arg(long, conflicts_with = "hosts")]
+    realtime: bool,
 }
 
 /// Entry point of the process (the `swarm-world` binary in the orchestrator package).
@@ -57,7 +61,12 @@ pub fn main(vocabulary: swarmrt_protocol::Vocabulary) -> std::process::ExitCode 
         }
     };
     let hosts = hosts.as_ref().map(|(f, l)| (f, *l));
-    match shell::run(&run, &cfg, &args.out, vocabulary, hosts) {
+    let mode = if args.realtime {
+        shell::Mode::Realtime
+    } else {
+        shell::Mode::LockStep
+    };
+    match shell::run(&run, &cfg, &args.out, vocabulary, hosts, mode) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             tracing::error!("world failed: {e}");

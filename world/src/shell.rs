@@ -52,6 +52,85 @@ pub struct ShellStats {
     /// Traffic with each remote host (`--hosts` runs only).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub link: Vec<HostTraffic>,
+    /// How the wall clock went (`--realtime` runs only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub realtime: Option<RealtimeStats>,
+}
+
+/// How the world paces its ticks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Each tick waits for every live robot's answer (or its deadline): replayable.
+    LockStep,
+    /// One tick every `scenario.dt` of wall-clock time, with whatever commands arrived
+    /// (DESIGN section 2): for slow foreign controllers and hardware in the loop.
+    Realtime,
+}
+
+/// What happened against the wall clock in a real-time run (`shell.realtime`).
+#[derive(Debug, Default, serde::Serialize)]
+pub struct RealtimeStats {
+    /// The tick period, `scenario.dt` in milliseconds.
+    pub period_ms: f64,
+    /// Robot-ticks in which a robot sent nothing new and kept its last command (or stood
+    /// still, having sent none yet).
+    pub missed: u64,
+    /// The robots that missed ticks, with how many.
+    pub missed_by_robot: BTreeMap<u32, u64>,
+    /// Commands that arrived answering an earlier tick than the current one (applied as the
+    /// robot's latest).
+    pub stale: u64,
+    /// Ticks whose own work (sensing, stepping, recording) overran the period; the clock
+    /// then restarts from the late tick rather than rushing to catch up.
+    pub overruns: u64,
+}
+
+/// Real-time mode's memory of each robot's latest command.
+struct Standing {
+    last: Vec<Option<Command>>,
+    /// True once `last` has been applied: its frames and notes went out, later ticks reuse
+    /// only its motion.
+    applied: Vec<bool>,
+    /// Whether a command arrived in the current tick's window.
+    fresh: Vec<bool>,
+    /// When each robot's process last sent anything.
+    heard_at: Vec<Instant>,
+}
+
+impl Standing {
+    fn new(n: usize) -> Standing {
+        Standing {
+            last: vec![None; n],
+            applied: vec![false; n],
+            fresh: vec![false; n],
+            heard_at: vec![Instant::now(); n],
+        }
+    }
+
+    /// Forgets robot `r`'s command (killed, frozen or restarted: it must not move on it).
+    fn forget(&mut self, r: u32) {
+        self.last[r as usize] = None;
+        self.heard_at[r as usize] = Instant::now();
+    }
+
+    /// The command robot `r` acts on at `tick`: its latest, with motion only when it was
+    /// applied before. A command naming a later tick is left as is, for the world to refuse.
+    fn command(&mut self, r: u32, tick: u64, stats: &mut RealtimeStats) -> Option<Command> {
+        let i = r as usize;
+        if !std::mem::take(&mut self.fresh[i]) {
+            stats.missed += 1;
+            *stats.missed_by_robot.entry(r).or_default() += 1;
+        }
+        let mut c = self.last[i]?;
+        if c.tick <= tick {
+            c.tick = tick;
+        }
+        if std::mem::replace(&mut self.applied[i], true) {
+            c.outbox_len = 0;
+            c.report_len = 0;
+        }
+        Some(c)
+    }
 }
 
 /// How long the world waits at the end for every host to say its robots are gone, before it
@@ -280,8 +359,10 @@ pub fn run(
     out_dir: &Path,
     vocabulary: swarmrt_protocol::Vocabulary,
     hosts: Option<(&HostsFile, u32)>,
+    mode: Mode,
 ) -> Result<(), IpcError> {
     let n = cfg.robots.count as usize;
+    let realtime = mode == Mode::Realtime;
     let mut world = World::new(cfg, vocabulary).map_err(|e| format!("{}: {}", e.key, e.message))?;
     let mut recorder = Recorder::create(out_dir, cfg.robots.aerial.is_some())?;
 
@@ -386,11 +467,19 @@ pub fn run(
     let mut reborn: BTreeSet<u32> = BTreeSet::new();
     let events = world.drain_events();
     recorder.record(world.tick(), world.robots(), &events)?;
+    let period = Duration::from_secs_f64(cfg.scenario.dt);
+    let mut standing = Standing::new(n);
+    let mut rt_stats = RealtimeStats {
+        period_ms: period.as_secs_f64() * 1e3,
+        ..RealtimeStats::default()
+    };
+    let mut tick_ends = Instant::now() + period;
     while !interrupted && !world.finished() {
         let mut rejoining: BTreeSet<u32> = BTreeSet::new();
         for signal in world.take_signals() {
             match signal {
                 ProcessSignal::Kill(robot) => {
+                    standing.forget(robot);
                     robot_of.retain(|_, r| *r != robot);
                     if let Some(r) = remote.as_mut() {
                         r.bound.remove(&robot);
@@ -398,10 +487,18 @@ pub fn run(
                     reborn.remove(&robot);
                     report(&WorldReport::Kill { robot });
                 }
-                ProcessSignal::Freeze(robot) => report(&WorldReport::Freeze { robot }),
-                ProcessSignal::Thaw(robot) => report(&WorldReport::Thaw { robot }),
+                ProcessSignal::Freeze(robot) => {
+                    standing.forget(robot);
+                    report(&WorldReport::Freeze { robot })
+                }
+                ProcessSignal::Thaw(robot) => {
+                    // Its silence while frozen was ordered, not a hang.
+                    standing.forget(robot);
+                    report(&WorldReport::Thaw { robot })
+                }
                 ProcessSignal::Restart { robot, incarnation } => {
                     // Samples from the old process are no robot's answer any more.
+                    standing.forget(robot);
                     robot_of.retain(|_, r| *r != robot);
                     if let Some(r) = remote.as_mut() {
                         r.bound.remove(&robot);
@@ -492,7 +589,31 @@ pub fn run(
 
         let sent_at = Instant::now();
         let mut late_logged = false;
+        if realtime {
+            interrupted |= collect_realtime(
+                &subscriber,
+                &listener,
+                &node,
+                &control,
+                &mut world,
+                &mut robot_of,
+                &mut reborn,
+                &mut standing,
+                tick_ends,
+                unresponsive,
+                &mut stats,
+                &mut rt_stats,
+            )?;
+            for robot in std::mem::take(&mut waiting) {
+                if world.robots()[robot as usize].state.expects_command() {
+                    commands[robot as usize] = standing.command(robot, tick, &mut rt_stats);
+                }
+            }
+        }
         loop {
+            if realtime {
+                break;
+            }
             receive(
                 &subscriber,
                 &mut robot_of,
@@ -560,6 +681,14 @@ pub fn run(
             last_progress = Instant::now();
             report(&WorldReport::Tick { tick: world.tick() });
         }
+        tick_ends += period;
+        if realtime && Instant::now() > tick_ends {
+            rt_stats.overruns += 1;
+            tick_ends = Instant::now() + period;
+        }
+    }
+    if realtime {
+        stats.realtime = Some(rt_stats);
     }
 
     // Tell robots the run is over (a header-only sample), then report.
@@ -628,6 +757,86 @@ fn receive(
         }
     }
     Ok(())
+}
+
+/// Real-time mode's wait: until `until`, takes every command that arrives as its robot's
+/// latest (binding restarted robots' fresh processes as in lock-step), and gives up on a
+/// robot that has sent nothing for `unresponsive`. Returns true when the run must stop.
+#[allow(clippy::too_many_arguments)]
+fn collect_realtime(
+    subscriber: &Subscriber<ipc::Svc, Command, ()>,
+    listener: &Listener<ipc::Svc>,
+    node: &Node<ipc::Svc>,
+    control: &Receiver<Control>,
+    world: &mut World,
+    robot_of: &mut BTreeMap<UniquePublisherId, u32>,
+    reborn: &mut BTreeSet<u32>,
+    standing: &mut Standing,
+    until: Instant,
+    unresponsive: Duration,
+    stats: &mut ShellStats,
+    rt: &mut RealtimeStats,
+) -> Result<bool, IpcError> {
+    let tick = world.tick();
+    loop {
+        while let Some(sample) = subscriber.receive()? {
+            let origin = sample.origin();
+            let c = *sample.payload();
+            drop(sample);
+            let kind = CommandKind::from_u32(c.kind);
+            let Some(&robot) = robot_of.get(&origin) else {
+                if c.version == PROTOCOL_VERSION
+                    && kind == Some(CommandKind::Hello)
+                    && reborn.remove(&c.robot)
+                {
+                    robot_of.insert(origin, c.robot);
+                    standing.forget(c.robot);
+                } else {
+                    stats.unknown_sender += 1;
+                }
+                continue;
+            };
+            let i = robot as usize;
+            standing.heard_at[i] = Instant::now();
+            if kind == Some(CommandKind::Hello) {
+                stats.extra_commands += 1;
+                continue;
+            }
+            if c.tick < tick {
+                rt.stale += 1;
+            }
+            if standing.fresh[i] {
+                stats.extra_commands += 1;
+            }
+            standing.last[i] = Some(c);
+            standing.applied[i] = false;
+            standing.fresh[i] = true;
+        }
+        let mut none = BTreeSet::new();
+        if drain_control(control, node, world, &mut none)? {
+            return Ok(true);
+        }
+        let now = Instant::now();
+        let hung: Vec<u32> = world
+            .robots()
+            .iter()
+            .filter(|r| r.state.expects_command())
+            .map(|r| r.id)
+            .filter(|&r| now.duration_since(standing.heard_at[r as usize]) >= unresponsive)
+            .collect();
+        for robot in hung {
+            robot_of.retain(|_, r| *r != robot);
+            let waited = now.duration_since(standing.heard_at[robot as usize]);
+            give_up(world, robot, waited, "nothing sent");
+            standing.forget(robot);
+        }
+        if now >= until {
+            return Ok(false);
+        }
+        if wait(listener, node, until - now)? {
+            return Ok(true);
+        }
+    }
 }
 
 /// Marks a robot that answered nothing for `scenario.unresponsive_ms` dead and asks the

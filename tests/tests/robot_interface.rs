@@ -1,0 +1,271 @@
+//! The robot interface beyond the built-in robot: the run directory's `iceoryx2.toml`, spare
+//! subscriber slots for tools attaching mid-run (changing no record byte), `--realtime` with
+//! a slow robot, and bad `robots.program` entries refused before the run.
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use iceoryx2::prelude::*;
+use iceoryx2_bb_system_types::file_path::FilePath;
+use swarmrt_protocol::{Command as RobotCommand, Observation, ObservationHeader};
+use swarmrt_tests::{
+    assert_ok, bytes, metrics, run_config, swarm, swarm_bin, wait_until, wait_with_watchdog,
+    workspace,
+};
+
+const LIMIT: Duration = Duration::from_secs(120);
+
+/// What the observer saw.
+#[derive(Debug, Default)]
+struct Seen {
+    observations: usize,
+    commands: usize,
+    first_tick: Option<u64>,
+}
+
+/// Attaches to the run in `dir` once it is past tick 20, through the run directory's
+/// `config/iceoryx2.toml` alone, as a tool would: subscribes to observations and commands,
+/// holds a sample for a while as a slow viewer does, and leaves after `want` ticks or when
+/// `over` is set.
+fn observe(dir: &Path, want: usize, over: &AtomicBool) -> Seen {
+    let cfg_file = dir.join("config/iceoryx2.toml");
+    wait_until("the run to pass tick 20", LIMIT, || {
+        swarmrt_tests::last_tick(dir) >= 20
+    });
+    let path = FilePath::new(cfg_file.to_str().unwrap().as_bytes()).unwrap();
+    let cfg = iceoryx2::config::Config::from_file(&path).expect("the run's iceoryx2.toml loads");
+    let node = NodeBuilder::new()
+        .name(&NodeName::new("observer").unwrap())
+        .config(&cfg)
+        .create::<ipc::Service>()
+        .unwrap();
+    let mut names = Vec::new();
+    ipc::Service::list(&cfg, |s| {
+        names.push(s.static_details.name().to_string());
+        CallbackProgression::Continue
+    })
+    .unwrap();
+    let obs_name = names.iter().find(|n| n.ends_with("/observations")).unwrap();
+    let cmd_name = names.iter().find(|n| n.ends_with("/commands")).unwrap();
+    let obs = node
+        .service_builder(&ServiceName::new(obs_name).unwrap())
+        .publish_subscribe::<[Observation]>()
+        .user_header::<ObservationHeader>()
+        .open()
+        .expect("a spare subscriber slot on observations");
+    let obs_sub = obs.subscriber_builder().create().unwrap();
+    let obs_event = node
+        .service_builder(&ServiceName::new(obs_name).unwrap())
+        .event()
+        .open()
+        .unwrap();
+    let listener = obs_event.listener_builder().create().unwrap();
+    let cmds = node
+        .service_builder(&ServiceName::new(cmd_name).unwrap())
+        .publish_subscribe::<RobotCommand>()
+        .open()
+        .expect("a spare subscriber slot on commands");
+    let cmd_sub = cmds.subscriber_builder().create().unwrap();
+    let mut seen = Seen::default();
+    let start = Instant::now();
+    while seen.observations < want && start.elapsed() < LIMIT && !over.load(Ordering::SeqCst) {
+        let _ = listener.timed_wait(|_| {}, Duration::from_millis(200));
+        while let Some(s) = obs_sub.receive().unwrap() {
+            seen.first_tick.get_or_insert(s.user_header().tick);
+            seen.observations += 1;
+            if seen.observations == 3 {
+                // A slow viewer: hold this sample while the world goes on.
+                std::thread::sleep(Duration::from_millis(300));
+            }
+        }
+        while cmd_sub.receive().unwrap().is_some() {
+            seen.commands += 1;
+        }
+    }
+    seen
+}
+
+#[test]
+fn a_tool_attaching_mid_run_changes_no_record_byte() {
+    let tmp = tempfile::tempdir().unwrap();
+    let plain = tmp.path().join("plain");
+    let watched = tmp.path().join("watched");
+    let args = ["--ticks", "1500", "--set", "scenario.stop_when_done=false"];
+    run_config("configs/goto_simple.toml", &plain, &args);
+
+    let mut run_args = vec!["run", "configs/goto_simple.toml"];
+    run_args.extend_from_slice(&args);
+    run_args.extend_from_slice(&["--out", watched.to_str().unwrap()]);
+    let child = Command::new(swarm_bin())
+        .current_dir(workspace())
+        .args(&run_args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let over = AtomicBool::new(false);
+    let seen = std::thread::scope(|s| {
+        let observer = s.spawn(|| observe(&watched, 40, &over));
+        let out = wait_with_watchdog(child, LIMIT);
+        over.store(true, Ordering::SeqCst);
+        assert_ok(&out);
+        observer.join().unwrap()
+    });
+    assert!(seen.observations >= 40, "{seen:?}");
+    assert!(seen.commands >= 40, "{seen:?}");
+    assert!(seen.first_tick.unwrap() >= 20, "attached mid-run: {seen:?}");
+    for f in ["trajectory.csv", "events.jsonl", "config.toml"] {
+        assert!(
+            bytes(&plain, f) == bytes(&watched, f),
+            "{f} differs with a tool attached"
+        );
+    }
+    let m = metrics(&watched);
+    assert_eq!(m["shell"]["unknown_sender"], 0);
+    assert_eq!(m["reproducible"], true);
+}
+
+#[test]
+fn without_spare_slots_a_tool_is_refused_and_the_run_goes_on() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let child = Command::new(swarm_bin())
+        .current_dir(workspace())
+        .args([
+            "run",
+            "configs/goto_simple.toml",
+            "--ticks",
+            "150",
+            "--set",
+            "scenario.stop_when_done=false",
+            "--set",
+            "ipc.observers=0",
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let refused = std::panic::catch_unwind(|| observe(&dir, 5, &AtomicBool::new(false))).is_err();
+    assert_ok(&wait_with_watchdog(child, LIMIT));
+    assert!(
+        refused,
+        "with ipc.observers = 0 there is no slot for a tool"
+    );
+    assert_eq!(metrics(&dir)["ticks"], 150);
+}
+
+#[test]
+fn realtime_ticks_by_the_clock_and_a_slow_robot_keeps_its_last_command() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let child = Command::new(swarm_bin())
+        .current_dir(workspace())
+        .args([
+            "run",
+            "configs/goto_simple.toml",
+            "--realtime",
+            "--ticks",
+            "40",
+            "--out",
+            dir.to_str().unwrap(),
+        ])
+        // Robot 4 thinks 250 ms per tick: it answers about every third tick of 100 ms.
+        .env("SWARMRT_TEST_MISBEHAVE", "4:slow")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    assert_ok(&wait_with_watchdog(child, LIMIT));
+    let m = metrics(&dir);
+    assert_eq!(m["mode"], "realtime");
+    assert_eq!(m["reproducible"], false);
+    assert_eq!(m["ticks"], 40);
+    assert_eq!(m["unscheduled_deaths"].as_array().unwrap().len(), 0);
+    // Paced by the clock: 40 ticks of 0.1 s cannot take less than 4 s.
+    assert!(
+        m["wall_seconds"].as_f64().unwrap() >= 3.9,
+        "{}",
+        m["wall_seconds"]
+    );
+    let rt = &m["shell"]["realtime"];
+    // The slow robot misses ticks, but not all of them.
+    let missed = rt["missed_by_robot"]["4"].as_u64().unwrap();
+    assert!((10..40).contains(&missed), "{rt}");
+    assert!(rt["stale"].as_u64().unwrap() > 0, "{rt}");
+    // Between its answers it keeps moving on its last command instead of stopping.
+    let csv = String::from_utf8(bytes(&dir, "trajectory.csv")).unwrap();
+    let speeds: Vec<f64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|f| f[1] == "4" && f[0].parse::<u64>().unwrap() >= 5)
+        .map(|f| f[5].parse().unwrap())
+        .collect();
+    assert!(speeds.len() >= 30);
+    assert!(
+        speeds.iter().all(|v| *v > 0.0),
+        "robot 4 stood still on a missed tick: {speeds:?}"
+    );
+}
+
+#[test]
+fn bad_program_entries_fail_before_the_run_naming_the_key() {
+    let tmp = tempfile::tempdir().unwrap();
+    let script = tmp.path().join("robot.py");
+    std::fs::write(&script, "print('hi')\n").unwrap();
+    let cases = [
+        (
+            "robots.program=[\"./no/such/robot\"]".to_string(),
+            "key `robots.program[0]`",
+        ),
+        (
+            format!("robots.program=[\"{}\"]", script.display()),
+            "not executable",
+        ),
+        (
+            "robots.programs=[{robots=\"5..12\", program=[\"sh\"]}]".to_string(),
+            "key `robots.programs[0].robots`",
+        ),
+        (
+            "robots.programs=[{robots=1, program=[]}]".to_string(),
+            "key `robots.programs[0].program`",
+        ),
+    ];
+    for (set, want) in cases {
+        let dir = tmp.path().join("run");
+        let out = swarm(
+            &[
+                "run",
+                "configs/goto_simple.toml",
+                "--set",
+                &set,
+                "--out",
+                dir.to_str().unwrap(),
+            ],
+            LIMIT,
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{set}: {err}");
+        assert!(err.contains(want), "{set}: {err}");
+        assert!(!dir.join("trajectory.csv").exists(), "{set}: a run started");
+    }
+    let out = swarm(
+        &[
+            "run",
+            "configs/goto_simple.toml",
+            "--in-process",
+            "--set",
+            "robots.program=[\"sh\"]",
+        ],
+        LIMIT,
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--in-process"));
+}
