@@ -291,12 +291,17 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
     }
     report(&HostReport::Joined);
 
+    // `cd <this dir> && iox2 service list` on this host sees the run's local services.
+    let ipc_config = dir.join("config/iceoryx2.toml");
+    ipc::write_config_file(&run, &ipc_config)?;
     let mut robots = Robots::new(Launch {
         agent,
         run_id: args.run_id.clone(),
         config: dir.join("config.toml"),
         storage: dir.join("storage"),
         first,
+        cfg: cfg.clone(),
+        ipc_config,
     });
     let last = first + count as u32;
     for id in first..last {

@@ -29,6 +29,10 @@ pub struct Launch {
     pub storage: PathBuf,
     /// The host's first robot id (its robots read slot `id - first`).
     pub first: u32,
+    /// The run's config (which program each robot runs).
+    pub cfg: swarmrt_scenario::Config,
+    /// The run's iceoryx2 config on this host, for robot programs.
+    pub ipc_config: PathBuf,
 }
 
 /// The robot processes of this host.
@@ -61,7 +65,26 @@ impl Robots {
         reaped: &Sender<M>,
     ) -> std::io::Result<i32> {
         let l = &self.launch;
-        let child = child_command(&l.agent)
+        // A robot program (`robots.program`) runs as on the world's host: its own command
+        // line, then swarm-agent's arguments, and the run's names in its environment.
+        let mut cmd = match swarmrt_scenario::program::program_of(&l.cfg, robot) {
+            None => child_command(&l.agent),
+            Some((_, argv)) => {
+                let mut c = child_command(std::path::Path::new(&argv[0]));
+                c.args(&argv[1..]);
+                c
+            }
+        };
+        let run = swarmrt_protocol::services::RunServices::new(&l.run_id);
+        cmd.envs(run.robot_env(
+            robot,
+            incarnation,
+            &l.config,
+            &l.storage,
+            l.first,
+            &l.ipc_config,
+        ));
+        let child = cmd
             .args(["--run-id", &l.run_id, "--robot", &robot.to_string()])
             .args(["--incarnation", &incarnation.to_string()])
             .args(["--slot-offset", &l.first.to_string(), "--config"])
