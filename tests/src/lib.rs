@@ -2,7 +2,9 @@
 //! `swarm` with a watchdog, and reads run directories.
 #![warn(missing_docs)]
 
+pub mod c_robot;
 pub mod lab;
+pub mod python;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
