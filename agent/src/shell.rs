@@ -172,7 +172,8 @@ pub fn run(
                     cmd.outbox_len = 1;
                     cmd.outbox[0].dst = swarmrt_protocol::BROADCAST;
                     cmd.outbox[0].len = 3;
-                    cmd.outbox[0].payload[..3].copy_from_slice(&[0xff, 0xff, 0xff]);
+                    // The goto tag and a beacon cut short: neither a message nor opaque.
+                    cmd.outbox[0].payload[..3].copy_from_slice(&[0x00, 0x01, 0x02]);
                 }
                 Some(Misbehave::FrameToNobody) => {
                     let dst = cfg.robots.count + 7;

@@ -1,0 +1,260 @@
+"""The robot side of a swarmrt run, in Python: what agent/src/shell.rs does for the Rust robot.
+
+The orchestrator starts a robot program with the run's names in its environment
+(protocol/src/services.rs, `env`). `Robot.from_env()` opens a node with the run's own iceoryx2
+config, opens the four services the world created, makes this robot's ports and says hello;
+then `observations()` yields, one per tick, the observation this robot must answer, and the
+program answers each with `send()`:
+
+    robot = Robot.from_env()
+    for obs in robot.observations():
+        cmd = robot.command(obs)      # KIND_ACT for obs.tick: stopped, silent, lidar off
+        cmd.v = 0.1
+        robot.send(cmd)
+    sys.exit(robot.exit_code)         # 0: the world ended the run; 143: SIGTERM/SIGINT
+
+The rules it follows, and why:
+
+* Every sample is copied out (this robot's slot only) and released before the next receive:
+  the observation service lets a subscriber borrow one sample at a time, and a held sample
+  would make the next `receive` fail.
+* Every sample queued is drained after a wake-up; each one is a tick. A tick whose slot says
+  FROZEN, RESTARTING or DEAD is skipped (a thawed or fresh process may find one still queued;
+  the world expects no answer), a DOWN robot still answers (the world ignores the command).
+* A sample with `shutdown != 0` ends the generator with `exit_code` 0; that, and only that,
+  is what exit code 0 means to the orchestrator.
+* The wait is `timed_wait(500 ms)` then `node.wait(0)`: the timeout is a watchdog, not a poll.
+  An interrupted wait is a spurious wake (SIGCONT after a scheduled freeze fails the wait with
+  EINTR); only `node.wait` reporting a termination request (iceoryx2's SIGTERM/SIGINT
+  handler) ends the generator, with `exit_code` 143.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import sys
+import tomllib
+from typing import Iterator, Optional
+
+import iceoryx2 as iox2
+
+from ._messages import (
+    EVENT_COMMAND,
+    KIND_ACT,
+    KIND_HELLO,
+    PROTOCOL_VERSION,
+    STATE_ACTIVE,
+    STATE_DOWN,
+    Command,
+    Observation,
+    ObservationHeader,
+)
+
+#: How long a robot sleeps before checking for a termination request when no tick comes.
+IDLE_CHECK_MS = 500
+#: Exit code after SIGTERM/SIGINT (128 + 15, what a shell reports for a SIGTERMed process).
+EXIT_TERMINATED = 143
+#: Exit code after the world's shutdown sample.
+EXIT_SHUTDOWN = 0
+
+_OBS_SIZE = ctypes.sizeof(Observation)
+
+
+class ProtocolError(RuntimeError):
+    """The world speaks another protocol version, or the sample has no slot for this robot."""
+
+
+def _env(name: str) -> str:
+    try:
+        return os.environ[name]
+    except KeyError:
+        raise RuntimeError(
+            f"{name} is not set: this program is a swarmrt robot and must be started by "
+            "`swarm run` (robots.program in the config)"
+        ) from None
+
+
+class Robot:
+    """One robot's ports and identity. Build it with `Robot.from_env()`."""
+
+    def __init__(
+        self,
+        robot: int,
+        incarnation: int,
+        slot_offset: int,
+        run_id: str,
+        config: dict,
+        config_path: str,
+        storage: str,
+        node,
+        subscriber,
+        listener,
+        publisher,
+        notifier,
+    ) -> None:
+        self.id = robot
+        """This robot's id."""
+        self.incarnation = incarnation
+        """Scheduled restarts of this robot before this process (0 for its first)."""
+        self.slot_offset = slot_offset
+        """This robot's slot in the observation sample is `id - slot_offset`."""
+        self.run_id = run_id
+        self.config = config
+        """The run's resolved config (every key present, except [ipc] and robots.program*;
+        keys whose value is an empty list or no value at all are left out)."""
+        self.config_path = config_path
+        self.storage = storage
+        """A directory for state that must survive a scheduled restart."""
+        self.exit_code: Optional[int] = None
+        """Set when `observations()` ends: 0 after the world's shutdown, 143 after SIGTERM."""
+        self._node = node
+        self._subscriber = subscriber
+        self._listener = listener
+        self._publisher = publisher
+        self._notifier = notifier
+        self._idle = iox2.Duration.from_millis(IDLE_CHECK_MS)
+        self._zero = iox2.Duration.from_millis(0)
+
+    @classmethod
+    def from_env(cls, hello: bool = True) -> "Robot":
+        """Opens the run's services from the environment the orchestrator set, creates this
+        robot's ports and (unless `hello` is False) sends the hello that binds this robot to
+        its publisher in the world."""
+        robot = int(_env("SWARMRT_ROBOT"))
+        config_path = _env("SWARMRT_CONFIG")
+        with open(config_path, "rb") as f:
+            config = tomllib.load(f)
+        # The run's own root directory and shared-memory prefix: without them this node
+        # would look for the services in iceoryx2's default location and not find them.
+        cfg = iox2.config.from_file(iox2.FilePath.new(_env("SWARMRT_IPC_CONFIG")))
+        node = (
+            iox2.NodeBuilder.new()
+            .name(iox2.NodeName.new(_env("SWARMRT_NODE_NAME")))
+            .config(cfg)
+            .create(iox2.ServiceType.Ipc)
+        )
+        obs_name = iox2.ServiceName.new(_env("SWARMRT_OBSERVATIONS"))
+        cmd_name = iox2.ServiceName.new(_env("SWARMRT_COMMANDS"))
+        observations = (
+            node.service_builder(obs_name)
+            .publish_subscribe(iox2.Slice[Observation])
+            .user_header(ObservationHeader)
+            .open()
+        )
+        observations_event = node.service_builder(obs_name).event().open()
+        commands = node.service_builder(cmd_name).publish_subscribe(Command).open()
+        commands_event = node.service_builder(cmd_name).event().open()
+        r = cls(
+            robot=robot,
+            incarnation=int(os.environ.get("SWARMRT_INCARNATION", "0")),
+            slot_offset=int(os.environ.get("SWARMRT_SLOT_OFFSET", "0")),
+            run_id=_env("SWARMRT_RUN_ID"),
+            config=config,
+            config_path=config_path,
+            storage=os.environ.get("SWARMRT_STORAGE", ""),
+            node=node,
+            subscriber=observations.subscriber_builder().create(),
+            listener=observations_event.listener_builder().create(),
+            publisher=commands.publisher_builder().create(),
+            notifier=commands_event.notifier_builder()
+            .default_event_id(iox2.EventId.new(EVENT_COMMAND))
+            .create(),
+        )
+        if hello:
+            r.hello()
+        return r
+
+    # --- commands ------------------------------------------------------------------------
+
+    def hello(self) -> None:
+        """Says this robot's ports exist: the world binds robot `id` to this publisher."""
+        cmd = Command()
+        cmd.version = PROTOCOL_VERSION
+        cmd.robot = self.id
+        cmd.kind = KIND_HELLO
+        cmd.pid = os.getpid()
+        self.send(cmd)
+
+    def command(self, obs: Observation) -> Command:
+        """The answer to `obs` as Rust's `Command::act`: stopped, lidar off, no frames, no
+        notes. A DOWN robot sends exactly this."""
+        cmd = Command()
+        cmd.version = PROTOCOL_VERSION
+        cmd.robot = self.id
+        cmd.tick = obs.tick
+        cmd.kind = KIND_ACT
+        return cmd
+
+    def send(self, cmd: Command) -> None:
+        """Publishes `cmd` and wakes the world (event `EVENT_COMMAND`)."""
+        self._publisher.send_copy(cmd)
+        self._notifier.notify()
+
+    # --- the loop ------------------------------------------------------------------------
+
+    def _take(self, sample) -> Optional[Observation]:
+        """Copies this robot's slot out of `sample` and releases it. Returns None for the
+        world's shutdown (and sets `exit_code`)."""
+        try:
+            header = sample.user_header().contents
+            version, shutdown = int(header.version), int(header.shutdown)
+            del header
+            if version != PROTOCOL_VERSION:
+                raise ProtocolError(
+                    f"world speaks protocol {version} but this robot speaks {PROTOCOL_VERSION}"
+                )
+            if shutdown != 0:
+                self.exit_code = EXIT_SHUTDOWN
+                return None
+            payload = sample.payload()
+            slot = self.id - self.slot_offset
+            if not 0 <= slot < payload.len():
+                raise ProtocolError(f"observation sample has no slot for robot {self.id}")
+            obs = Observation()
+            ctypes.memmove(ctypes.addressof(obs), payload.as_ptr() + slot * _OBS_SIZE, _OBS_SIZE)
+            del payload
+            return obs
+        finally:
+            sample.delete()
+
+    def observations(self) -> Iterator[Observation]:
+        """Yields, in tick order, every observation this robot must answer (state ACTIVE or
+        DOWN), each a copy the caller may keep. Answer each with `send` before asking for the
+        next. Ends when the world shuts the run down (`exit_code` 0) or the process is asked
+        to terminate (`exit_code` 143)."""
+        while True:
+            while True:
+                sample = self._subscriber.receive()
+                if sample is None:
+                    break
+                obs = self._take(sample)
+                del sample
+                if obs is None:
+                    return
+                if obs.state in (STATE_ACTIVE, STATE_DOWN):
+                    yield obs
+            try:
+                self._listener.timed_wait(self._idle)
+            except iox2.ListenerWaitError as e:
+                # A signal interrupted the wait: SIGTERM/SIGINT (checked below) or the
+                # SIGCONT ending a scheduled freeze, after which Linux fails it with EINTR.
+                if "InterruptSignal" not in str(e):
+                    raise
+            try:
+                self._node.wait(self._zero)
+            except iox2.NodeWaitFailure:
+                self.exit_code = EXIT_TERMINATED
+                return
+
+    def run(self, step) -> int:
+        """Answers every observation with `step(robot, obs) -> Command` and returns the exit
+        code; `sys.exit(robot.run(step))` is a whole robot's main loop."""
+        for obs in self.observations():
+            self.send(step(self, obs))
+        return self.exit_code if self.exit_code is not None else 1
+
+
+def main(step) -> None:
+    """`Robot.from_env()`, then `run(step)`, then exit with its code."""
+    sys.exit(Robot.from_env().run(step))

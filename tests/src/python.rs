@@ -1,0 +1,204 @@
+//! A Python for the tests of Python robots: a venv under the cargo target directory with the
+//! package in `bindings/python` installed, made once and shared by every test binary.
+//!
+//! `pip install ./bindings/python` is what a user runs too, so the tests use the package as
+//! it installs (with `iceoryx2` pinned to `Cargo.lock`'s version by its `pyproject.toml`), not
+//! the source tree on `PYTHONPATH`. The venv is rebuilt when any file of the package changes
+//! (a stamp holds a fingerprint of them), under an exclusive `flock`, so test binaries that
+//! start at the same moment build it once and never use a half-built one. On a fresh Debian
+//! machine without Python's venv module, `python3` and `python3-venv` are installed with apt,
+//! as the multi-host tests install iproute2 (`lab.rs`).
+
+use std::hash::{Hash, Hasher};
+use std::os::fd::AsRawFd;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::OnceLock;
+
+use crate::workspace;
+
+/// The package's directory in the workspace.
+pub fn package_dir() -> PathBuf {
+    workspace().join("bindings").join("python")
+}
+
+/// An example robot program (`examples/python/<name>`), as an absolute path.
+pub fn example(name: &str) -> PathBuf {
+    workspace().join("examples").join("python").join(name)
+}
+
+/// The Python of the tests' venv (`<target>/swarmrt-venv/bin/python`), with the package
+/// installed and up to date with its sources; built on first use. Panics saying what failed.
+pub fn python() -> &'static Path {
+    static PYTHON: OnceLock<PathBuf> = OnceLock::new();
+    PYTHON.get_or_init(|| ensure_venv().unwrap_or_else(|e| panic!("the tests' Python venv: {e}")))
+}
+
+/// `["<venv python>", "<example>", args...]` as a TOML array, for `robots.program` and
+/// `[[robots.programs]]`.
+pub fn program(example_name: &str, args: &[&str]) -> String {
+    let mut words = vec![
+        python().display().to_string(),
+        example(example_name).display().to_string(),
+    ];
+    words.extend(args.iter().map(|a| a.to_string()));
+    let quoted: Vec<String> = words.iter().map(|w| format!("{w:?}")).collect();
+    format!("[{}]", quoted.join(", "))
+}
+
+/// `<target>`: the test binary is `<target>/<profile>/deps/<name>`.
+fn target_dir() -> PathBuf {
+    let exe = std::env::current_exe().expect("the test binary's path");
+    exe.ancestors()
+        .nth(3)
+        .expect("the test binary lives in <target>/<profile>/deps")
+        .to_path_buf()
+}
+
+/// A fingerprint of every file of the package (paths and contents), so an edited or
+/// regenerated module (`_messages.py`) reinstalls the package.
+fn fingerprint(dir: &Path) -> String {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return;
+        };
+        for e in entries.flatten() {
+            let p = e.path();
+            let name = e.file_name();
+            if name == "__pycache__" || name.to_string_lossy().ends_with(".pyc") {
+                continue;
+            }
+            if p.is_dir() {
+                walk(&p, out);
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    let mut files = Vec::new();
+    walk(dir, &mut files);
+    files.sort();
+    // `DefaultHasher::new()` has fixed keys: the same bytes give the same value in every
+    // process (a different toolchain may give another value; that only reinstalls).
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    for f in &files {
+        f.strip_prefix(dir).unwrap_or(f).hash(&mut h);
+        std::fs::read(f).unwrap_or_default().hash(&mut h);
+    }
+    format!("{:016x} {} files", h.finish(), files.len())
+}
+
+/// Runs `cmd`, returning its combined output as the error when it fails.
+fn run(cmd: &mut Command, what: &str) -> Result<(), String> {
+    let out = cmd
+        .stdin(Stdio::null())
+        .output()
+        .map_err(|e| format!("{what}: cannot start: {e}"))?;
+    if out.status.success() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{what} failed ({}):\n{}{}",
+            out.status,
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        ))
+    }
+}
+
+/// `apt-get install -y python3 python3-venv`, after an `apt-get update` if the first try
+/// fails (a fresh image has no package lists).
+fn apt_install_python() -> Result<(), String> {
+    let install = || {
+        run(
+            Command::new("apt-get")
+                .args(["install", "-y", "-qq", "python3", "python3-venv"])
+                .env("DEBIAN_FRONTEND", "noninteractive"),
+            "apt-get install python3 python3-venv",
+        )
+    };
+    install().or_else(|_| {
+        run(
+            Command::new("apt-get").args(["update", "-qq"]),
+            "apt-get update",
+        )?;
+        install()
+    })
+}
+
+/// Makes a venv at `venv` with the first of `python3` (on `PATH`) and `/usr/bin/python3` that
+/// can; installs Python with apt when neither can.
+fn make_venv(venv: &Path) -> Result<(), String> {
+    let try_all = || {
+        let mut why = Vec::new();
+        for py in ["python3", "/usr/bin/python3"] {
+            let _ = std::fs::remove_dir_all(venv);
+            match run(
+                Command::new(py).arg("-m").arg("venv").arg(venv),
+                &format!("{py} -m venv"),
+            ) {
+                Ok(()) => return Ok(()),
+                Err(e) => why.push(e),
+            }
+        }
+        Err(why.join("\n"))
+    };
+    try_all().or_else(|first| {
+        apt_install_python()
+            .map_err(|e| format!("no Python with a venv module ({first}), and {e}"))?;
+        try_all()
+    })
+}
+
+fn ensure_venv() -> Result<PathBuf, String> {
+    let target = target_dir();
+    let venv = target.join("swarmrt-venv");
+    let python = venv.join("bin").join("python");
+    let stamp = venv.join(".swarmrt-stamp");
+    let pkg = package_dir();
+
+    std::fs::create_dir_all(&target).map_err(|e| format!("{}: {e}", target.display()))?;
+    let lock_path = target.join("swarmrt-venv.lock");
+    let lock = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&lock_path)
+        .map_err(|e| format!("{}: {e}", lock_path.display()))?;
+    // Held until `lock` drops at the end of this function: one builder at a time across
+    // every test process; the others wait, then find the stamp current.
+    // SAFETY: flock on a descriptor this function owns.
+    if unsafe { libc::flock(lock.as_raw_fd(), libc::LOCK_EX) } != 0 {
+        return Err(format!(
+            "flock {}: {}",
+            lock_path.display(),
+            std::io::Error::last_os_error()
+        ));
+    }
+
+    // The stamp names the Python too: a venv whose interpreter vanished is rebuilt.
+    let want = format!("{}\n{}", fingerprint(&pkg), python.display());
+    let current = python.exists() && std::fs::read_to_string(&stamp).is_ok_and(|s| s == want);
+    if current {
+        return Ok(python);
+    }
+    let _ = std::fs::remove_file(&stamp);
+    make_venv(&venv)?;
+    run(
+        Command::new(&python)
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "--disable-pip-version-check",
+            ])
+            .arg(&pkg)
+            .env("PYTHONDONTWRITEBYTECODE", "1"),
+        &format!("pip install {}", pkg.display()),
+    )?;
+    // Written last: a build cut short leaves no stamp and is redone.
+    std::fs::write(&stamp, want).map_err(|e| format!("{}: {e}", stamp.display()))?;
+    drop(lock);
+    Ok(python)
+}
