@@ -76,7 +76,7 @@ fn a_down_robot_stands_still_and_malformed_frames_are_counted() {
     o.state = RobotState::Down as u8;
     let mut junk = Frame::EMPTY;
     junk.len = MAX_PAYLOAD as u16;
-    junk.payload.fill(0xff);
+    junk.payload.fill(0x7f);
     o.inbox[0] = junk;
     let mut good = Frame::EMPTY;
     let bytes = postcard_beacon();
@@ -85,10 +85,16 @@ fn a_down_robot_stands_still_and_malformed_frames_are_counted() {
     good.src = 7;
     good.sent_tick = 0;
     o.inbox[1] = good;
-    o.inbox_len = 2;
+    // Raw bytes between foreign robots: skipped, neither decoded nor counted.
+    o.inbox[2] = Frame::opaque(swarmrt_protocol::BROADCAST, &[0xff, 1, 2]).unwrap();
+    o.inbox_len = 3;
     let c = a.step(&o);
     assert_eq!((c.v, c.omega, c.outbox_len), (0.0, 0.0, 0));
-    assert_eq!(a.malformed(), 1, "the junk frame only: the beacon decodes");
+    assert_eq!(
+        a.malformed(),
+        1,
+        "the junk frame only: the beacon decodes, the opaque frame is skipped"
+    );
 }
 
 fn postcard_beacon() -> Vec<u8> {

@@ -269,3 +269,39 @@ fn bad_program_entries_fail_before_the_run_naming_the_key() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--in-process"));
 }
+
+#[test]
+fn python_c_and_rust_robots_in_one_run_replay_the_all_rust_records() {
+    let tmp = tempfile::tempdir().unwrap();
+    let python = swarmrt_tests::python::program("goto.py", &[]);
+    let c = swarmrt_tests::c_robot::goto_c().display().to_string();
+    // Robots 0..3 in Python, 3..6 in C, 6..9 the built-in Rust robot.
+    let mixed = format!(
+        "robots.programs=[{{robots=\"0..3\", program={python}}}, {{robots=\"3..6\", program=[{c:?}]}}]"
+    );
+    let ticks = ["--ticks", "300"];
+    run_config("configs/goto_simple.toml", &tmp.path().join("rust"), &ticks);
+    for run in ["mixed-1", "mixed-2"] {
+        let dir = tmp.path().join(run);
+        let m = run_config(
+            "configs/goto_simple.toml",
+            &dir,
+            &["--ticks", "300", "--set", &mixed],
+        );
+        assert_eq!(m["rejected"], 0, "{run}");
+        assert_eq!(m["shell"]["bad_hello"], 0, "{run}");
+        assert_eq!(m["reproducible"], true, "{run}");
+        // Every robot process ran the program its range names and ended on the shutdown.
+        for p in m["processes"].as_array().unwrap() {
+            assert_eq!(p["end"], "exited with code 0", "{run}: {p}");
+        }
+        for f in ["trajectory.csv", "events.jsonl"] {
+            assert!(
+                bytes(&tmp.path().join("rust"), f) == bytes(&dir, f),
+                "{run}: {f} differs from the all-Rust run"
+            );
+        }
+    }
+    let cfg = String::from_utf8(bytes(&tmp.path().join("mixed-1"), "config.toml")).unwrap();
+    assert!(cfg.contains("goto.py") && cfg.contains("goto-c"), "{cfg}");
+}

@@ -7,7 +7,7 @@ use swarmrt_agent::behaviours::formation::FormationNote;
 use swarmrt_agent::behaviours::goto::Beacon;
 use swarmrt_agent::registry::VOCABULARY;
 use swarmrt_agent::{Note, RadioMsg};
-use swarmrt_protocol::{BROADCAST, Command, MAX_OUTBOX, NoteJson, Observation, RobotState};
+use swarmrt_protocol::{BROADCAST, Command, Frame, MAX_OUTBOX, NoteJson, Observation, RobotState};
 use swarmrt_scenario::Config;
 use swarmrt_world::world::Stage;
 use swarmrt_world::{Event, World};
@@ -122,7 +122,8 @@ fn nan_wrong_version_wrong_tick_and_bad_frames_are_rejected() {
     assert_eq!(w.validate(0, &c), Err("radio frame to an unknown robot"));
     let mut c = good;
     c.push_frame(BROADCAST, &BEACON).unwrap();
-    c.outbox[0].payload[0] = 0xff;
+    // A variant index no robot knows (0xff would be an opaque frame).
+    c.outbox[0].payload[0] = 0x7f;
     assert_eq!(w.validate(0, &c), Err("malformed radio frame"));
     assert_eq!(
         w.validate(1, &good),
@@ -136,6 +137,26 @@ fn nan_wrong_version_wrong_tick_and_bad_frames_are_rejected() {
     let mut c = good;
     c.report_len = u16::MAX;
     assert_eq!(w.validate(0, &c), Err("report length out of range"));
+}
+
+#[test]
+fn opaque_frames_pass_the_boundary_and_reach_the_others() {
+    let mut w = World::new(&config(&["robots.count=2"]), VOCABULARY).unwrap();
+    let mut obs = vec![Observation::empty(0, 0); 2];
+    w.observe(&mut obs);
+    let mut c = Command::act(0, 0);
+    c.outbox[0] = Frame::opaque(BROADCAST, b"foreign").unwrap();
+    c.outbox_len = 1;
+    assert_eq!(w.validate(0, &c), Ok(()));
+    w.step(&[Some(c), Some(Command::act(1, 0))]);
+    w.observe(&mut obs);
+    let heard: Vec<&[u8]> = obs[1]
+        .inbox()
+        .iter()
+        .filter_map(|f| f.opaque_bytes())
+        .collect();
+    assert_eq!(heard, [&b"foreign"[..]]);
+    assert_eq!(obs[1].inbox()[0].src, 0);
 }
 
 #[test]
