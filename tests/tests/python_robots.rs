@@ -275,6 +275,42 @@ fn a_crashing_python_robot_is_a_death_not_a_hang_or_a_leak() {
 }
 
 #[test]
+fn a_hung_python_robot_is_given_up_killed_and_cleaned_up() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    // Robot 3 thinks for a minute on its first tick: a hang.
+    let hang = some_robots("3", &program("misbehave.py", &["slow:60000"]));
+    let started = std::time::Instant::now();
+    let m = run(
+        "configs/goto_simple.toml",
+        &dir,
+        &[
+            "--ticks",
+            "40",
+            "--set",
+            &hang,
+            "--set",
+            "scenario.deadline_ms=300",
+            "--set",
+            "scenario.unresponsive_ms=1500",
+        ],
+    );
+    assert!(
+        started.elapsed() < std::time::Duration::from_secs(50),
+        "no waiting out the hang"
+    );
+    assert_eq!(m["ticks"], 40, "the run went on: {m}");
+    assert_eq!(m["dead"], 1, "{m}");
+    assert_eq!(m["unscheduled_deaths"][0]["robot"], 3, "{m}");
+    assert_eq!(m["reproducible"], false, "{m}");
+    assert_eq!(state(&dir, 39, 3), "dead");
+    let procs = processes_of(&m, 3);
+    assert!(procs[0].1.contains("signal 9"), "{procs:?}");
+    let run_id = m["run_id"].as_str().expect("metrics.json has run_id");
+    assert!(leftovers(run_id).is_empty(), "{:?}", leftovers(run_id));
+}
+
+#[test]
 fn frozen_killed_and_restarted_python_robots_replay_as_rust_ones() {
     let tmp = tempfile::tempdir().unwrap();
     let t = tmp.path();
