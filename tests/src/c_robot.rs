@@ -3,7 +3,7 @@
 //! tests' profile, and C programs compiled against it, among them `examples/c/goto.c`.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Command;
 use std::sync::OnceLock;
 
 use crate::workspace;
@@ -54,39 +54,18 @@ pub fn out_dir() -> PathBuf {
     profile_dir().join("c-robots")
 }
 
-fn runs(program: &str, arg: &str) -> bool {
-    Command::new(program)
-        .arg(arg)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
 /// The C compiler (`cc`), installing gcc with apt once per test process when there is none,
 /// so the README's test command needs no set-up step on a fresh Debian machine.
 pub fn cc() -> &'static str {
     static CC: OnceLock<Result<&'static str, String>> = OnceLock::new();
     let found = CC.get_or_init(|| {
         for c in ["cc", "gcc"] {
-            if runs(c, "--version") {
+            if crate::runs(c, "--version") {
                 return Ok(c);
             }
         }
-        let install = || {
-            Command::new("apt-get")
-                .args(["install", "-y", "-qq", "gcc", "libc6-dev"])
-                .env("DEBIAN_FRONTEND", "noninteractive")
-                .status()
-                .is_ok_and(|s| s.success())
-        };
-        let ok = install()
-            || (Command::new("apt-get")
-                .args(["update", "-qq"])
-                .status()
-                .is_ok_and(|s| s.success())
-                && install());
-        if ok && runs("gcc", "--version") {
+        let ok = crate::apt_install(&["gcc", "libc6-dev"]).is_ok();
+        if ok && crate::runs("gcc", "--version") {
             Ok("gcc")
         } else {
             Err("no C compiler (`cc`) and `apt-get install gcc` failed".into())

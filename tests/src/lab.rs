@@ -52,20 +52,7 @@ fn ensure_iproute2() -> Result<(), String> {
         if have("ip") {
             return Ok(());
         }
-        let ok = Command::new("apt-get")
-            .args(["install", "-y", "-qq", "iproute2"])
-            .env("DEBIAN_FRONTEND", "noninteractive")
-            .status()
-            .is_ok_and(|s| s.success())
-            || (Command::new("apt-get")
-                .args(["update", "-qq"])
-                .status()
-                .is_ok_and(|s| s.success())
-                && Command::new("apt-get")
-                    .args(["install", "-y", "-qq", "iproute2"])
-                    .env("DEBIAN_FRONTEND", "noninteractive")
-                    .status()
-                    .is_ok_and(|s| s.success()));
+        let ok = crate::apt_install(&["iproute2"]).is_ok();
         if ok && have("ip") {
             Ok(())
         } else {

@@ -286,3 +286,71 @@ pub fn assert_nothing_left(children: &[(i32, String)], run_id: &str) {
     }
     assert!(leftovers(run_id).is_empty(), "{:?}", leftovers(run_id));
 }
+
+/// True when `program arg` starts and exits 0 (a probe for a tool such as `cc --version`).
+pub fn runs(program: &str, arg: &str) -> bool {
+    Command::new(program)
+        .arg(arg)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// `apt-get install -y <packages>`, after an `apt-get update` when the first try fails (a
+/// fresh image has no package lists), so the README's test command needs no set-up step on a
+/// fresh Debian machine. `Err` says which step failed.
+pub fn apt_install(packages: &[&str]) -> Result<(), String> {
+    let install = || {
+        Command::new("apt-get")
+            .args(["install", "-y", "-qq"])
+            .args(packages)
+            .env("DEBIAN_FRONTEND", "noninteractive")
+            .stdin(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success())
+    };
+    let updated = || {
+        Command::new("apt-get")
+            .args(["update", "-qq"])
+            .stdin(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success())
+    };
+    if install() || (updated() && install()) {
+        Ok(())
+    } else {
+        Err(format!("`apt-get install {}` failed", packages.join(" ")))
+    }
+}
+
+/// Starts `swarm args...` from the workspace root with `env` added, its output captured
+/// (finish it with [`wait_with_watchdog`]).
+pub fn spawn_swarm(args: &[&str], env: &[(&str, &str)]) -> std::process::Child {
+    Command::new(swarm_bin())
+        .current_dir(workspace())
+        .args(args)
+        .envs(env.iter().copied())
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("swarm starts")
+}
+
+/// The processes `metrics.json` lists for `robot`: (incarnation, end, scheduled_kill).
+pub fn processes_of(m: &serde_json::Value, robot: u64) -> Vec<(u64, String, bool)> {
+    m["processes"]
+        .as_array()
+        .expect("metrics.json lists the processes")
+        .iter()
+        .filter(|p| p["robot"] == robot)
+        .map(|p| {
+            (
+                p["incarnation"].as_u64().unwrap(),
+                p["end"].as_str().unwrap().to_string(),
+                p["scheduled_kill"].as_bool().unwrap(),
+            )
+        })
+        .collect()
+}

@@ -106,26 +106,6 @@ fn run(cmd: &mut Command, what: &str) -> Result<(), String> {
     }
 }
 
-/// `apt-get install -y python3 python3-venv`, after an `apt-get update` if the first try
-/// fails (a fresh image has no package lists).
-fn apt_install_python() -> Result<(), String> {
-    let install = || {
-        run(
-            Command::new("apt-get")
-                .args(["install", "-y", "-qq", "python3", "python3-venv"])
-                .env("DEBIAN_FRONTEND", "noninteractive"),
-            "apt-get install python3 python3-venv",
-        )
-    };
-    install().or_else(|_| {
-        run(
-            Command::new("apt-get").args(["update", "-qq"]),
-            "apt-get update",
-        )?;
-        install()
-    })
-}
-
 /// Makes a venv at `venv` with the first of `python3` (on `PATH`) and `/usr/bin/python3` that
 /// can; installs Python with apt when neither can.
 fn make_venv(venv: &Path) -> Result<(), String> {
@@ -144,7 +124,7 @@ fn make_venv(venv: &Path) -> Result<(), String> {
         Err(why.join("\n"))
     };
     try_all().or_else(|first| {
-        apt_install_python()
+        crate::apt_install(&["python3", "python3-venv"])
             .map_err(|e| format!("no Python with a venv module ({first}), and {e}"))?;
         try_all()
     })

@@ -138,23 +138,6 @@ fn bad_fault_targets_are_refused_with_the_key() {
     }
 }
 
-/// The processes `metrics.json` lists for `robot`: (incarnation, end, scheduled_kill).
-fn processes_of(m: &serde_json::Value, robot: u64) -> Vec<(u64, String, bool)> {
-    m["processes"]
-        .as_array()
-        .expect("metrics.json lists the processes")
-        .iter()
-        .filter(|p| p["robot"] == robot)
-        .map(|p| {
-            (
-                p["incarnation"].as_u64().unwrap(),
-                p["end"].as_str().unwrap().to_string(),
-                p["scheduled_kill"].as_bool().unwrap(),
-            )
-        })
-        .collect()
-}
-
 /// Robot 5 restarted at tick 250, the leader of the moment at tick 400.
 const RESTARTS: &str =
     "faults.restart=[{tick=250,robot=5,down_ticks=15},{tick=400,robot=\"leader\"}]";

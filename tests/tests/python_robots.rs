@@ -45,23 +45,6 @@ fn some_robots(ids: &str, program: &str) -> String {
     format!("robots.programs=[{{robots={ids:?}, program={program}}}]")
 }
 
-/// The processes `metrics.json` lists for `robot`: (incarnation, end, scheduled_kill).
-fn processes_of(m: &serde_json::Value, robot: u64) -> Vec<(u64, String, bool)> {
-    m["processes"]
-        .as_array()
-        .expect("metrics.json lists the processes")
-        .iter()
-        .filter(|p| p["robot"] == robot)
-        .map(|p| {
-            (
-                p["incarnation"].as_u64().unwrap(),
-                p["end"].as_str().unwrap().to_string(),
-                p["scheduled_kill"].as_bool().unwrap(),
-            )
-        })
-        .collect()
-}
-
 /// Robot `robot`'s state column at `tick` in `dir`'s trajectory.
 fn state(dir: &Path, tick: u64, robot: u32) -> String {
     let csv = String::from_utf8(bytes(dir, "trajectory.csv")).unwrap();

@@ -3,7 +3,6 @@
 //! a slow robot, and bad `robots.program` entries refused before the run.
 
 use std::path::Path;
-use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -11,8 +10,7 @@ use iceoryx2::prelude::*;
 use iceoryx2_bb_system_types::file_path::FilePath;
 use swarmrt_protocol::{Command as RobotCommand, Observation, ObservationHeader};
 use swarmrt_tests::{
-    assert_ok, bytes, metrics, run_config, swarm, swarm_bin, wait_until, wait_with_watchdog,
-    workspace,
+    assert_ok, bytes, metrics, run_config, spawn_swarm, swarm, wait_until, wait_with_watchdog,
 };
 
 const LIMIT: Duration = Duration::from_secs(120);
@@ -98,14 +96,7 @@ fn a_tool_attaching_mid_run_changes_no_record_byte() {
     let mut run_args = vec!["run", "configs/goto_simple.toml"];
     run_args.extend_from_slice(&args);
     run_args.extend_from_slice(&["--out", watched.to_str().unwrap()]);
-    let child = Command::new(swarm_bin())
-        .current_dir(workspace())
-        .args(&run_args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let child = spawn_swarm(&run_args, &[]);
     let over = AtomicBool::new(false);
     let seen = std::thread::scope(|s| {
         let observer = s.spawn(|| observe(&watched, 40, &over));
@@ -132,9 +123,8 @@ fn a_tool_attaching_mid_run_changes_no_record_byte() {
 fn without_spare_slots_a_tool_is_refused_and_the_run_goes_on() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("run");
-    let child = Command::new(swarm_bin())
-        .current_dir(workspace())
-        .args([
+    let child = spawn_swarm(
+        &[
             "run",
             "configs/goto_simple.toml",
             "--ticks",
@@ -145,12 +135,9 @@ fn without_spare_slots_a_tool_is_refused_and_the_run_goes_on() {
             "ipc.observers=0",
             "--out",
             dir.to_str().unwrap(),
-        ])
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+        ],
+        &[],
+    );
     let refused = std::panic::catch_unwind(|| observe(&dir, 5, &AtomicBool::new(false))).is_err();
     assert_ok(&wait_with_watchdog(child, LIMIT));
     assert!(
@@ -164,9 +151,9 @@ fn without_spare_slots_a_tool_is_refused_and_the_run_goes_on() {
 fn realtime_ticks_by_the_clock_and_a_slow_robot_keeps_its_last_command() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("run");
-    let child = Command::new(swarm_bin())
-        .current_dir(workspace())
-        .args([
+    // Robot 4 thinks 250 ms per tick: it answers about every third tick of 100 ms.
+    let child = spawn_swarm(
+        &[
             "run",
             "configs/goto_simple.toml",
             "--realtime",
@@ -174,14 +161,9 @@ fn realtime_ticks_by_the_clock_and_a_slow_robot_keeps_its_last_command() {
             "40",
             "--out",
             dir.to_str().unwrap(),
-        ])
-        // Robot 4 thinks 250 ms per tick: it answers about every third tick of 100 ms.
-        .env("SWARMRT_TEST_MISBEHAVE", "4:slow")
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+        ],
+        &[("SWARMRT_TEST_MISBEHAVE", "4:slow")],
+    );
     assert_ok(&wait_with_watchdog(child, LIMIT));
     let m = metrics(&dir);
     assert_eq!(m["mode"], "realtime");

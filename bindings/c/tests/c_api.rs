@@ -4,68 +4,12 @@
 //! ("conflicting types"); then it is linked with `libswarmrt.a` and run.
 
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
+use std::process::Command;
+
+use swarmrt_tests::c_robot::{LINK_LIBS, cc, staticlib};
 
 fn crate_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// `target/<profile>` of this test binary (`target/<profile>/deps/<test>`).
-fn profile_dir() -> PathBuf {
-    let exe = std::env::current_exe().unwrap();
-    exe.parent().unwrap().parent().unwrap().to_path_buf()
-}
-
-fn runs(program: &str) -> bool {
-    Command::new(program)
-        .arg("--version")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
-/// A C compiler; gcc is installed with apt when there is none (as the end-to-end tests do).
-fn cc() -> &'static str {
-    if runs("cc") {
-        return "cc";
-    }
-    let install = || {
-        Command::new("apt-get")
-            .args(["install", "-y", "-qq", "gcc", "libc6-dev"])
-            .env("DEBIAN_FRONTEND", "noninteractive")
-            .status()
-            .is_ok_and(|s| s.success())
-    };
-    let _ = install()
-        || (Command::new("apt-get")
-            .args(["update", "-qq"])
-            .status()
-            .is_ok_and(|s| s.success())
-            && install());
-    assert!(
-        runs("gcc"),
-        "no C compiler (`cc`) and `apt-get install gcc` failed"
-    );
-    "gcc"
-}
-
-/// `libswarmrt.a` as this test's profile builds it. `cargo test` builds only the rlib of
-/// the library for its tests, so the static library is built here.
-fn staticlib() -> PathBuf {
-    let profile = profile_dir();
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let mut cmd = Command::new(cargo);
-    cmd.current_dir(crate_dir())
-        .args(["build", "--quiet", "-p", "swarmrt-c", "--lib"]);
-    if profile.file_name().is_some_and(|n| n == "release") {
-        cmd.arg("--release");
-    }
-    assert!(
-        cmd.status().unwrap().success(),
-        "building libswarmrt.a failed"
-    );
-    profile.join("libswarmrt.a")
 }
 
 #[test]
@@ -92,15 +36,7 @@ fn the_header_declares_every_function_as_the_library_defines_it() {
         .arg(tmp.path())
         .arg(crate_dir().join("tests/c_api.c"))
         .arg(staticlib())
-        .args([
-            "-lgcc_s",
-            "-lutil",
-            "-lrt",
-            "-lpthread",
-            "-lm",
-            "-ldl",
-            "-lc",
-        ])
+        .args(LINK_LIBS)
         .arg("-o")
         .arg(&exe)
         .output()
