@@ -354,3 +354,15 @@ pub fn processes_of(m: &serde_json::Value, robot: u64) -> Vec<(u64, String, bool
         })
         .collect()
 }
+
+/// Asserts two run directories hold the same `trajectory.csv` and `events.jsonl` bytes.
+pub fn assert_same_records(a: &Path, b: &Path, what: &str) {
+    for f in ["trajectory.csv", "events.jsonl"] {
+        assert!(
+            bytes(a, f) == bytes(b, f),
+            "{what}: {f} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
+    }
+}

@@ -4,7 +4,6 @@
 //! terminated mid-run is handled like a Rust one and leaves nothing behind.
 
 use std::fmt::Write as _;
-use std::path::Path;
 use std::process::Command;
 use std::time::Duration;
 
@@ -14,26 +13,6 @@ use swarmrt_tests::*;
 
 const LIMIT: Duration = Duration::from_secs(120);
 const CONFIG: &str = "configs/goto_simple.toml";
-
-/// `swarm run CONFIG <args> --out <dir>`; asserts success and returns the metrics.
-fn run(dir: &Path, args: &[&str]) -> serde_json::Value {
-    let mut all = vec!["run", CONFIG, "--out", dir.to_str().unwrap()];
-    all.extend_from_slice(args);
-    assert_ok(&swarm(&all, LIMIT));
-    metrics(dir)
-}
-
-/// Asserts both run directories hold the same `trajectory.csv` and `events.jsonl`.
-fn assert_same_records(a: &Path, b: &Path, what: &str) {
-    for f in ["trajectory.csv", "events.jsonl"] {
-        assert!(
-            bytes(a, f) == bytes(b, f),
-            "{what}: {f} differs ({} vs {})",
-            a.display(),
-            b.display()
-        );
-    }
-}
 
 /// `swarmrt_observation_header_t` for `ObservationHeader` (as `layout` names the C types).
 fn snake(rust: &str) -> String {
@@ -104,8 +83,8 @@ fn c_goto_robots_write_the_records_of_rust_ones() {
     let tmp = tempfile::tempdir().unwrap();
     let (c, rust) = (tmp.path().join("c"), tmp.path().join("rust"));
     // Until every robot is home (stop_when_done), so events.jsonl holds the arrivals.
-    let m = run(&c, &["--set", &program_for_all(goto_c())]);
-    run(&rust, &[]);
+    let m = run_config(CONFIG, &c, &["--set", &program_for_all(goto_c())]);
+    run_config(CONFIG, &rust, &[]);
     assert_same_records(&c, &rust, "all C vs all Rust");
     assert_eq!(m["reached_target"], 9, "{m}");
     assert_eq!(m["rejected"], 0, "{m}");
@@ -116,8 +95,12 @@ fn c_goto_robots_write_the_records_of_rust_ones() {
     }
     // And for a fixed number of ticks, mid-journey.
     let (c, rust) = (tmp.path().join("c200"), tmp.path().join("rust200"));
-    run(&c, &["--ticks", "200", "--set", &program_for_all(goto_c())]);
-    run(&rust, &["--ticks", "200"]);
+    run_config(
+        CONFIG,
+        &c,
+        &["--ticks", "200", "--set", &program_for_all(goto_c())],
+    );
+    run_config(CONFIG, &rust, &["--ticks", "200"]);
     assert_same_records(&c, &rust, "all C vs all Rust, 200 ticks");
 }
 
@@ -156,20 +139,10 @@ fn c_goto_robots_read_group_goals_ray_angles_and_noisy_sensors_as_rust_ones_do()
     let tmp = tempfile::tempdir().unwrap();
     let config = tmp.path().join("goto_groups.toml");
     std::fs::write(&config, GROUPS).unwrap();
-    let run = |dir: &Path, extra: &[&str]| {
-        let mut all = vec![
-            "run",
-            config.to_str().unwrap(),
-            "--out",
-            dir.to_str().unwrap(),
-        ];
-        all.extend_from_slice(extra);
-        assert_ok(&swarm(&all, LIMIT));
-        metrics(dir)
-    };
+    let config = config.to_str().unwrap();
     let (c, rust) = (tmp.path().join("c"), tmp.path().join("rust"));
-    run(&c, &["--set", &program_for_all(goto_c())]);
-    let m = run(&rust, &[]);
+    run_config(config, &c, &["--set", &program_for_all(goto_c())]);
+    let m = run_config(config, &rust, &[]);
     assert_same_records(&c, &rust, "start groups, ray angles, noise: C vs Rust");
     assert!(m["radio"]["dropped_loss"].as_u64().unwrap() > 0, "{m}");
 }
@@ -184,9 +157,9 @@ fn a_mixed_swarm_replays_and_matches_an_all_rust_one() {
         tmp.path().join("mixed-b"),
         tmp.path().join("rust"),
     );
-    let m = run(&a, &args);
-    run(&b, &args);
-    run(&rust, &["--ticks", "400"]);
+    let m = run_config(CONFIG, &a, &args);
+    run_config(CONFIG, &b, &args);
+    run_config(CONFIG, &rust, &["--ticks", "400"]);
     assert_same_records(&a, &b, "mixed, run twice");
     assert_same_records(&a, &rust, "mixed vs all Rust");
     assert_eq!(m["reproducible"], true, "{m}");
@@ -228,8 +201,8 @@ fn c_robots_killed_frozen_and_restarted_by_the_fault_schedule_replay_and_leave_n
     let mut with_c = faults.to_vec();
     with_c.extend_from_slice(&["--set", &set]);
     let (c, rust) = (tmp.path().join("c"), tmp.path().join("rust"));
-    let m = run(&c, &with_c);
-    run(&rust, &faults);
+    let m = run_config(CONFIG, &c, &with_c);
+    run_config(CONFIG, &rust, &faults);
     assert_same_records(&c, &rust, "C robots under faults vs Rust robots");
 
     assert_eq!(m["dead"], 1, "{m}");

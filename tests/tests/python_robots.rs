@@ -15,26 +15,6 @@ use swarmrt_tests::*;
 
 const LIMIT: Duration = Duration::from_secs(120);
 
-/// Runs `swarm run <config> --out <dir> <extra>...` and returns its metrics.
-fn run(config: &str, dir: &Path, extra: &[&str]) -> serde_json::Value {
-    let mut args = vec!["run", config, "--out", dir.to_str().unwrap()];
-    args.extend_from_slice(extra);
-    assert_ok(&swarm(&args, LIMIT));
-    metrics(dir)
-}
-
-/// Asserts two run directories hold the same `trajectory.csv` and `events.jsonl` bytes.
-fn assert_same_records(a: &Path, b: &Path, what: &str) {
-    for f in ["trajectory.csv", "events.jsonl"] {
-        assert!(
-            bytes(a, f) == bytes(b, f),
-            "{what}: {f} differs between {} and {}",
-            a.display(),
-            b.display()
-        );
-    }
-}
-
 /// `robots.program=<all robots run this>`.
 fn all_robots(program: &str) -> String {
     format!("robots.program={program}")
@@ -131,11 +111,11 @@ fn python_goto_robots_write_the_rust_robots_records_alone_and_mixed() {
     let t = tmp.path();
     let goto = program("goto.py", &[]);
     let ticks = ["--ticks", "200"];
-    let rust = run("configs/goto_simple.toml", &t.join("rust"), &ticks);
+    let rust = run_config("configs/goto_simple.toml", &t.join("rust"), &ticks);
     assert_eq!(rust["ticks"], 200);
 
     let all = all_robots(&goto);
-    let m = run(
+    let m = run_config(
         "configs/goto_simple.toml",
         &t.join("python"),
         &["--ticks", "200", "--set", &all],
@@ -147,7 +127,7 @@ fn python_goto_robots_write_the_rust_robots_records_alone_and_mixed() {
     // Robots 0..4 in Python, the rest Rust: twice, the same bytes, and the Rust run's.
     let mixed = some_robots("0..4", &goto);
     for name in ["mixed-1", "mixed-2"] {
-        let m = run(
+        let m = run_config(
             "configs/goto_simple.toml",
             &t.join(name),
             &["--ticks", "200", "--set", &mixed],
@@ -163,14 +143,14 @@ fn python_flocking_robots_flock_with_rust_ones_bit_for_bit() {
     let t = tmp.path();
     let flocking = program("flocking.py", &[]);
     let cfg = "configs/flocking_obstacles.toml";
-    run(cfg, &t.join("rust"), &["--ticks", "300"]);
+    run_config(cfg, &t.join("rust"), &["--ticks", "300"]);
     let all = all_robots(&flocking);
-    let m = run(cfg, &t.join("python"), &["--ticks", "300", "--set", &all]);
+    let m = run_config(cfg, &t.join("python"), &["--ticks", "300", "--set", &all]);
     assert_eq!(m["rejected"], 0, "{m}");
     assert_same_records(&t.join("rust"), &t.join("python"), "all-Python flocking");
     // Robots 0 and 1 in Python hear the Rust robots' headings and are heard by them.
     let mixed = some_robots("0..2", &flocking);
-    run(cfg, &t.join("mixed"), &["--ticks", "300", "--set", &mixed]);
+    run_config(cfg, &t.join("mixed"), &["--ticks", "300", "--set", &mixed]);
     assert_same_records(&t.join("rust"), &t.join("mixed"), "mixed flocking");
 }
 
@@ -181,7 +161,7 @@ fn a_python_robot_sending_garbage_is_refused_and_the_others_are_unaffected() {
     // Robot 3 answers each tick with one of: a NaN speed, the wrong tick, a frame that is no
     // message, another robot's id.
     let bad = some_robots("3", &program("misbehave.py", &["garbage"]));
-    let m = run(
+    let m = run_config(
         "configs/goto_simple.toml",
         &t.join("python"),
         &["--ticks", "60", "--set", &bad],
@@ -238,7 +218,7 @@ fn a_crashing_python_robot_is_a_death_not_a_hang_or_a_leak() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("run");
     let crash = some_robots("3", &program("misbehave.py", &["crash:20"]));
-    let m = run(
+    let m = run_config(
         "configs/goto_simple.toml",
         &dir,
         &["--ticks", "60", "--set", &crash],
@@ -264,7 +244,7 @@ fn a_hung_python_robot_is_given_up_killed_and_cleaned_up() {
     // Robot 3 thinks for a minute on its first tick: a hang.
     let hang = some_robots("3", &program("misbehave.py", &["slow:60000"]));
     let started = std::time::Instant::now();
-    let m = run(
+    let m = run_config(
         "configs/goto_simple.toml",
         &dir,
         &[
@@ -307,11 +287,11 @@ fn frozen_killed_and_restarted_python_robots_replay_as_rust_ones() {
         "--set",
         "faults.restart=[{tick=90,robot=6,down_ticks=10}]",
     ];
-    run("configs/goto_simple.toml", &t.join("rust"), &faults);
+    run_config("configs/goto_simple.toml", &t.join("rust"), &faults);
     let all = all_robots(&program("goto.py", &[]));
     let mut args = faults.to_vec();
     args.extend_from_slice(&["--set", &all]);
-    let m = run("configs/goto_simple.toml", &t.join("python"), &args);
+    let m = run_config("configs/goto_simple.toml", &t.join("python"), &args);
     assert_same_records(&t.join("rust"), &t.join("python"), "faulted Python goto");
     assert_eq!(m["reproducible"], true, "{m}");
     assert_eq!(m["unscheduled_deaths"], serde_json::json!([]), "{m}");
