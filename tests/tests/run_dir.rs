@@ -29,18 +29,22 @@ fn short_run(dir: &Path, extra: &[&str]) -> Output {
     swarm(&args, LIMIT)
 }
 
-/// Every file of a directory with its bytes.
+/// Every file of a directory and its subdirectories (`config/iceoryx2.toml`) with its bytes,
+/// by path relative to `dir`.
 fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .flatten()
-        .map(|e| {
-            (
-                e.file_name().to_string_lossy().into_owned(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
-        .collect()
+    let mut files = BTreeMap::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            if e.file_type().unwrap().is_dir() {
+                todo.push(e.path());
+            } else {
+                let rel = e.path().strip_prefix(dir).unwrap().display().to_string();
+                files.insert(rel, std::fs::read(e.path()).unwrap());
+            }
+        }
+    }
+    files
 }
 
 fn stderr(out: &Output) -> String {
