@@ -103,8 +103,10 @@ fn goal_slots(
     bounds: [f64; 4],
     radius: f64,
 ) -> Option<Arc<[(f64, f64)]>> {
+    /// The inputs, floats by their bits.
     type Key = (usize, [u64; 8]);
-    static LAST: Mutex<Option<(Key, Option<Arc<[(f64, f64)]>>)>> = Mutex::new(None);
+    type Slots = Option<Arc<[(f64, f64)]>>;
+    static LAST: Mutex<Option<(Key, Slots)>> = Mutex::new(None);
     let b = bounds.map(f64::to_bits);
     let key: Key = (
         count,
