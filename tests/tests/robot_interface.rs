@@ -287,3 +287,35 @@ fn python_c_and_rust_robots_in_one_run_replay_the_all_rust_records() {
     let cfg = String::from_utf8(bytes(&tmp.path().join("mixed-1"), "config.toml")).unwrap();
     assert!(cfg.contains("goto.py") && cfg.contains("goto-c"), "{cfg}");
 }
+
+#[test]
+fn realtime_gives_up_on_a_hung_robot_and_keeps_the_clock() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    let hang = swarmrt_tests::python::program("misbehave.py", &["slow:60000"]);
+    let m = run_config(
+        "configs/goto_simple.toml",
+        &dir,
+        &[
+            "--realtime",
+            "--ticks",
+            "30",
+            "--set",
+            &format!("robots.programs=[{{robots=2, program={hang}}}]"),
+            "--set",
+            "scenario.deadline_ms=300",
+            "--set",
+            "scenario.unresponsive_ms=1000",
+        ],
+    );
+    assert_eq!(m["ticks"], 30);
+    assert_eq!(m["dead"], 1, "{m}");
+    assert_eq!(m["unscheduled_deaths"][0]["robot"], 2, "{m}");
+    // Killed after about a second of silence, not after its minute of thinking.
+    assert!(m["wall_seconds"].as_f64().unwrap() < 20.0, "{m}");
+    let csv = String::from_utf8(bytes(&dir, "trajectory.csv")).unwrap();
+    assert!(
+        csv.lines()
+            .any(|l| l.starts_with("30,2,") && l.ends_with(",dead"))
+    );
+}

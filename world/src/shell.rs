@@ -817,6 +817,13 @@ fn collect_realtime(
             return Ok(true);
         }
         let now = Instant::now();
+        if now < until {
+            if wait(listener, node, until - now)? {
+                return Ok(true);
+            }
+            continue;
+        }
+        // At the tick's end (once per tick, not per wake-up): robots silent for too long.
         let hung: Vec<u32> = world
             .robots()
             .iter()
@@ -830,12 +837,7 @@ fn collect_realtime(
             give_up(world, robot, waited, "nothing sent");
             standing.forget(robot);
         }
-        if now >= until {
-            return Ok(false);
-        }
-        if wait(listener, node, until - now)? {
-            return Ok(true);
-        }
+        return Ok(false);
     }
 }
 
