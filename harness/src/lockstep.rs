@@ -2,10 +2,11 @@
 //! order the process shells call them, so both modes write byte-identical records.
 
 use swarmrt_agent::Agent;
-use swarmrt_agent::consensus::raft::Persistent;
+use swarmrt_agent::consensus::raft::{MutantScope, Persistent};
 use swarmrt_protocol::{Command, Observation, RobotState};
 use swarmrt_scenario::Config;
 use swarmrt_world::map::MapError;
+use swarmrt_world::world::{OBSERVE_THREADS, PARALLEL_OBSERVE_MIN};
 use swarmrt_world::{Event, ProcessSignal, World};
 
 /// A world and its robots, stepped tick by tick.
@@ -71,26 +72,66 @@ impl Lockstep {
 
     /// The second phase: every robot whose process would run answers its observation (and,
     /// with storage on, makes its persistent state durable first, as its process does).
+    ///
+    /// From [`PARALLEL_OBSERVE_MIN`] robots on, the robots are split into contiguous ranges
+    /// that think on scoped threads, as [`World::observe`] splits them: each robot's core reads
+    /// only its own observation and state, so the commands are the same bytes in any split.
     pub fn think(&mut self) {
+        let n = self.agents.len();
         self.commands.clear();
+        self.commands.resize(n, None);
         let storing = self.storing;
-        self.commands.extend(
-            self.agents
-                .iter_mut()
-                .zip(&self.obs)
-                .zip(&mut self.stored)
-                .map(|((a, o), stored)| {
-                    RobotState::from_u8(o.state)
-                        .is_some_and(RobotState::expects_command)
-                        .then(|| {
-                            let cmd = a.step(o);
-                            if storing {
-                                *stored = a.consensus().and_then(|c| c.persistent());
-                            }
-                            cmd
-                        })
-                }),
-        );
+        let threads = if n >= PARALLEL_OBSERVE_MIN {
+            std::thread::available_parallelism()
+                .map(|p| p.get())
+                .unwrap_or(1)
+                .min(OBSERVE_THREADS)
+        } else {
+            1
+        };
+        let think = |agents: &mut [Agent],
+                     obs: &[Observation],
+                     stored: &mut [Option<Persistent>],
+                     commands: &mut [Option<Command>]| {
+            for (((a, o), stored), cmd) in agents.iter_mut().zip(obs).zip(stored).zip(commands) {
+                if RobotState::from_u8(o.state).is_some_and(RobotState::expects_command) {
+                    *cmd = Some(a.step(o));
+                    if storing {
+                        *stored = a.consensus().and_then(|c| c.persistent());
+                    }
+                }
+            }
+        };
+        if threads <= 1 {
+            think(
+                &mut self.agents,
+                &self.obs,
+                &mut self.stored,
+                &mut self.commands,
+            );
+            return;
+        }
+        let chunk = n.div_ceil(threads);
+        let mutant = MutantScope::current();
+        std::thread::scope(|s| {
+            let mut parts = self
+                .agents
+                .chunks_mut(chunk)
+                .zip(self.obs.chunks(chunk))
+                .zip(self.stored.chunks_mut(chunk))
+                .zip(self.commands.chunks_mut(chunk));
+            let first = parts.next();
+            for (((agents, obs), stored), commands) in parts {
+                let think = &think;
+                s.spawn(move || {
+                    mutant.enter();
+                    think(agents, obs, stored, commands)
+                });
+            }
+            if let Some((((agents, obs), stored), commands)) = first {
+                think(agents, obs, stored, commands);
+            }
+        });
     }
 
     /// The third phase: the world steps with the answers.

@@ -125,10 +125,14 @@ impl Map {
     /// Distance along the ray from `origin` in direction `angle` to the first obstacle, if any
     /// within `max_range`. A ray starting inside an obstacle hits at 0.
     pub fn cast(&self, origin: (f64, f64), angle: f64, max_range: f64) -> Option<f64> {
-        let ray = Ray::new(
-            Point2::new(origin.0, origin.1),
-            Vector2::new(angle.cos(), angle.sin()),
-        );
+        self.cast_dir(origin, (angle.cos(), angle.sin()), max_range)
+    }
+
+    /// [`Map::cast`] along the unit direction `dir` = (cos, sin) of the angle, for a caller
+    /// that has them already. A hit's distance does not depend on `max_range`, which only
+    /// decides whether it counts: a shorter `max_range` prunes more of the tree.
+    pub fn cast_dir(&self, origin: (f64, f64), dir: (f64, f64), max_range: f64) -> Option<f64> {
+        let ray = Ray::new(Point2::new(origin.0, origin.1), Vector2::new(dir.0, dir.1));
         self.obstacles
             .cast_ray(&Isometry2::identity(), &ray, max_range, true)
     }

@@ -83,6 +83,31 @@ pub fn set_mutant(m: Option<Mutant>) {
     MUTANT.with(|c| c.set(m));
 }
 
+/// The mutant selection of the calling thread, to carry onto the worker threads a caller
+/// splits robots over (the selection is per thread so that tests can run side by side).
+/// Without the `mutants` feature it carries nothing.
+#[derive(Debug, Clone, Copy)]
+pub struct MutantScope {
+    #[cfg(feature = "mutants")]
+    mutant: Option<Mutant>,
+}
+
+impl MutantScope {
+    /// This thread's selection.
+    pub fn current() -> MutantScope {
+        MutantScope {
+            #[cfg(feature = "mutants")]
+            mutant: MUTANT.with(|c| c.get()),
+        }
+    }
+
+    /// Makes it this thread's selection.
+    pub fn enter(self) {
+        #[cfg(feature = "mutants")]
+        set_mutant(self.mutant);
+    }
+}
+
 #[cfg(feature = "mutants")]
 macro_rules! mutant {
     ($m:ident) => {

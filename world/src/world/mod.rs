@@ -20,7 +20,7 @@
 use serde::Serialize;
 use std::collections::BTreeSet;
 use swarmrt_protocol::records;
-use swarmrt_protocol::{Command, Frame, NoteJson, RobotState, Vocabulary};
+use swarmrt_protocol::{Command, NoteJson, RobotState, Vocabulary};
 use swarmrt_scenario::Config;
 pub use swarmrt_scenario::wrap_angle;
 
@@ -111,7 +111,6 @@ pub struct World {
     sensor_rng: Vec<Rng>,
     /// Per robot, draws of `robots.noise.wheel_slip` (none when it is zero).
     slip_rng: Vec<Rng>,
-    inboxes: Vec<Vec<Frame>>,
     events: Vec<Event>,
     rejected_once: BTreeSet<(u32, &'static str)>,
     metrics: WorldMetrics,
@@ -179,7 +178,6 @@ impl World {
             slip_rng: (0..n)
                 .map(|i| rng::stream(seed, "wheel_slip", i as u64))
                 .collect(),
-            inboxes: vec![Vec::new(); n],
             events: Vec::new(),
             rejected_once: BTreeSet::new(),
             metrics: WorldMetrics::default(),

@@ -35,6 +35,6 @@ impl World {
             .iter()
             .map(|r| r.state == RobotState::Active)
             .collect();
-        self.radio.deliver(self.tick, &can_talk, &mut self.inboxes);
+        self.radio.deliver_due(self.tick, &can_talk);
     }
 }
