@@ -16,6 +16,7 @@ use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use swarmrt_harness::lockstep::Lockstep;
 use swarmrt_scenario::Config;
+use swarmrt_world::Stage;
 
 use super::child::{ChildMsg, ChildSpec};
 use super::floor::{FloorResult, SAMPLE_TICK};
@@ -134,6 +135,10 @@ pub struct InProcessRow {
     pub step_ms: f64,
     /// Radio copies sent per tick (the medium's load).
     pub radio_copies_per_tick: f64,
+    /// Mean ms per tick in each stage of the world (`World::set_stage_timing`): `sensing`
+    /// is observe plus the goal check, the others are parts of `step`.
+    #[serde(default)]
+    pub stages_ms: Vec<(String, f64)>,
     /// Set when the measurement failed.
     pub error: Option<String>,
 }
@@ -472,6 +477,7 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
     let start = Instant::now();
     let cpu_start = process_cpu_secs();
     let mut ticks = 0u64;
+    run.world_mut().set_stage_timing(true);
     while ticks < cfg.scenario.ticks && start.elapsed() < IN_PROCESS_BUDGET {
         interrupt.check()?;
         let t0 = Instant::now();
@@ -490,6 +496,11 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
     let secs = start.elapsed().as_secs_f64();
     let cpu_secs = process_cpu_secs() - cpu_start;
     let per = |d: Duration| d.as_secs_f64() * 1e3 / ticks.max(1) as f64;
+    let stage_times = run.world_mut().take_stage_times();
+    let stages_ms = Stage::ALL
+        .iter()
+        .map(|&st| (st.name().to_string(), per(stage_times.get(st))))
+        .collect();
     Ok(InProcessRow {
         agents: n as u32,
         ticks,
@@ -502,6 +513,7 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
         agents_ms: per(think),
         step_ms: per(step),
         radio_copies_per_tick: run.world().metrics().radio.sent as f64 / ticks.max(1) as f64,
+        stages_ms,
         error: None,
     })
 }
@@ -636,6 +648,14 @@ pub fn table(r: &SwarmReport) -> String {
             fmt_rate(p.radio_copies_per_tick),
             format!("{:.2} s", p.setup_secs)
         );
+        if !p.stages_ms.is_empty() {
+            let stages: Vec<String> = p
+                .stages_ms
+                .iter()
+                .map(|(name, v)| format!("{name} {}", ms(*v)))
+                .collect();
+            let _ = writeln!(s, "{:>6} world stages per tick: {}", "", stages.join(", "));
+        }
     }
     s
 }

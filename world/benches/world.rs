@@ -1,5 +1,6 @@
 //! Criterion benchmarks of the world core: a whole tick (observe + step) and observe alone at
-//! N = 9, 100, 1000; lidar ray casts against the map; radio routing and delivery.
+//! N = 9, 100, 1000; each stage of a tick at N = 100, 1000; lidar ray casts against the map;
+//! radio routing and delivery.
 //!
 //! The scenario is `configs/goto_simple.toml` with the start grid (0.7 m spacing) in the
 //! middle of a map sized for N, every robot's lidar on, spinning in place (v = 0,
@@ -15,9 +16,9 @@ use swarmrt_agent::RadioMsg;
 use swarmrt_agent::behaviours::goto::Beacon;
 use swarmrt_protocol::{BROADCAST, Command, Frame, Observation, Vocabulary};
 use swarmrt_scenario::Config;
-use swarmrt_world::World;
 use swarmrt_world::map::Map;
 use swarmrt_world::radio::RadioMedium;
+use swarmrt_world::{Stage, World};
 
 const BEACON_PERIOD: u64 = 5;
 
@@ -136,7 +137,6 @@ fn radio(c: &mut Criterion) {
         beacon.len = 24;
         let one = [beacon];
         let mut medium = RadioMedium::new(cfg.radio, 1, n);
-        let mut inboxes: Vec<Vec<Frame>> = vec![Vec::new(); n];
         let mut tick = 0u64;
         let mut copies = 0u64;
         // A fifth of the robots broadcast each tick, as with the go-to beacon period.
@@ -154,9 +154,9 @@ fn radio(c: &mut Criterion) {
                     .collect();
                 medium.send(tick, &outboxes, &positions, &can_talk, &mut |_, _| false);
                 tick += 1;
-                medium.deliver(tick, &can_talk, &mut inboxes);
+                medium.deliver_due(tick, &can_talk);
                 copies = medium.stats().delivered;
-                black_box(&inboxes);
+                black_box(medium.inbox(0).len());
             })
         });
         black_box(copies);
@@ -164,5 +164,33 @@ fn radio(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, world_tick, lidar, radio);
+/// Each stage of a whole tick on its own: the world's stage timers
+/// ([`World::set_stage_timing`]) measure every stage of each tick criterion runs, and
+/// `iter_custom` reports one stage's share. `sensing` is `World::observe` plus the goal check;
+/// `radio` is routing plus delivery.
+fn stages(c: &mut Criterion) {
+    let mut g = c.benchmark_group("stage");
+    for n in [100u32, 1000] {
+        g.throughput(Throughput::Elements(n as u64));
+        let (mut world, mut obs, mut cmds) = warm_world(n);
+        world.set_stage_timing(true);
+        for stage in Stage::ALL {
+            g.bench_with_input(BenchmarkId::new(stage.name(), n), &n, |b, _| {
+                b.iter_custom(|iters| {
+                    world.take_stage_times();
+                    for _ in 0..iters {
+                        world.observe(&mut obs);
+                        commands(&world, &mut cmds);
+                        world.step(&cmds);
+                        black_box(world.drain_events());
+                    }
+                    world.take_stage_times().get(stage)
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, world_tick, stages, lidar, radio);
 criterion_main!(benches);
