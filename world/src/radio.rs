@@ -113,15 +113,19 @@ enum Reason {
 
 impl RadioStats {
     fn count_drop(&mut self, why: Reason) {
-        self.dropped += 1;
+        self.count_drops(why, 1);
+    }
+
+    fn count_drops(&mut self, why: Reason, k: u64) {
+        self.dropped += k;
         match why {
-            Reason::Loss => self.dropped_loss += 1,
-            Reason::OutOfRange => self.dropped_out_of_range += 1,
-            Reason::Capacity => self.dropped_capacity += 1,
-            Reason::LineOfSight => self.dropped_line_of_sight += 1,
-            Reason::ReceiverDown => self.dropped_receiver_down += 1,
-            Reason::InboxFull => self.dropped_inbox_full += 1,
-            Reason::Partition => self.dropped_partition += 1,
+            Reason::Loss => self.dropped_loss += k,
+            Reason::OutOfRange => self.dropped_out_of_range += k,
+            Reason::Capacity => self.dropped_capacity += k,
+            Reason::LineOfSight => self.dropped_line_of_sight += k,
+            Reason::ReceiverDown => self.dropped_receiver_down += k,
+            Reason::InboxFull => self.dropped_inbox_full += k,
+            Reason::Partition => self.dropped_partition += k,
         }
     }
 }
@@ -135,6 +139,12 @@ struct Pending {
     due: u64,
     seq: u64,
     slot: u32,
+    /// Copies routed after this one with the same `due` when the receiver already had a full
+    /// inbox's worth due then: they will be dropped at delivery whatever happens (as
+    /// `dropped_inbox_full`, or `dropped_receiver_down` if the receiver stops talking), so
+    /// they wait here as a count instead of one entry each. A robot in a dense flock hears
+    /// hundreds of broadcasts a tick and keeps 32.
+    surplus: u32,
 }
 
 impl PartialEq for Pending {
@@ -188,6 +198,23 @@ impl Queue {
         }
     }
 
+    /// Counts one more copy due at `due` on the last entry, if the FIFO already holds
+    /// [`MAX_INBOX`] copies due then (so this one cannot reach the inbox). Never with the heap,
+    /// whose order is not arrival order.
+    fn absorb(&mut self, due: u64) -> bool {
+        let Queue::Fifo(q) = self else { return false };
+        if q.len() < MAX_INBOX || q[q.len() - MAX_INBOX].due != due {
+            return false;
+        }
+        match q.back_mut() {
+            Some(last) => {
+                last.surplus += 1;
+                true
+            }
+            None => false,
+        }
+    }
+
     /// The earliest copy, if it is due at `tick`.
     fn pop_due(&mut self, tick: u64) -> Option<Pending> {
         match self {
@@ -211,8 +238,15 @@ fn grid_cell(range: f64) -> f64 {
 }
 
 /// Talking robots other than `src` within `range` of it, ascending id, into `out`. `grid`
-/// holds the talking robots with finite positions.
-fn receivers_of(grid: &Grid, src: usize, positions: &[(f64, f64)], range: f64, out: &mut Vec<u32>) {
+/// holds the talking robots with finite positions; `marks` is scratch.
+fn receivers_of(
+    grid: &Grid,
+    src: usize,
+    positions: &[(f64, f64)],
+    range: f64,
+    out: &mut Vec<u32>,
+    marks: &mut Vec<u64>,
+) {
     out.clear();
     let p = positions[src];
     let visit = |id: usize| {
@@ -227,8 +261,28 @@ fn receivers_of(grid: &Grid, src: usize, positions: &[(f64, f64)], range: f64, o
         // a robot `in_range` accepts: candidates are filtered by the exact distance anyway.
         grid.near(p, range.max(0.0) * (1.0 + 1e-12) + 1e-9, visit);
     }
-    // The grid reports by cell; routing goes by ascending id.
-    out.sort_unstable();
+    // The grid reports by cell; routing goes by ascending id. Many receivers among few robots
+    // (a dense flock: ~480 of 1,000) are put in order faster by marking them in a bitset
+    // over all ids than by sorting; ids are distinct, so both give the same list.
+    let words = positions.len().div_ceil(64);
+    let sort_cost = out.len() * (usize::BITS - out.len().leading_zeros()) as usize;
+    if sort_cost > 4 * words {
+        marks.clear();
+        marks.resize(words, 0);
+        for &id in out.iter() {
+            marks[id as usize / 64] |= 1u64 << (id % 64);
+        }
+        out.clear();
+        for (w, &word) in marks.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                out.push((w * 64) as u32 + bits.trailing_zeros());
+                bits &= bits - 1;
+            }
+        }
+    } else {
+        out.sort_unstable();
+    }
 }
 
 /// Drops one reference to the frame at `slot`; the last frees the slot.
@@ -267,6 +321,8 @@ pub struct RadioMedium {
     /// The talking robots with finite positions, rebuilt per send that has a broadcast.
     grid: Grid,
     scratch: Vec<u32>,
+    /// Scratch bitset over robot ids for [`receivers_of`].
+    marks: Vec<u64>,
     stats: RadioStats,
     /// Radio group per robot while a partition or blackout is on; different groups are apart.
     groups: Option<Vec<u64>>,
@@ -290,6 +346,7 @@ impl RadioMedium {
             grid: Grid::default(),
             groups: None,
             scratch: Vec::new(),
+            marks: Vec::new(),
             stats: RadioStats::default(),
         }
     }
@@ -350,7 +407,14 @@ impl RadioMedium {
                 let mut slot = None;
                 if copy.dst == BROADCAST {
                     if !receivers_known {
-                        receivers_of(&self.grid, src, positions, range, &mut receivers);
+                        receivers_of(
+                            &self.grid,
+                            src,
+                            positions,
+                            range,
+                            &mut receivers,
+                            &mut self.marks,
+                        );
                         receivers_known = true;
                     }
                     for &dst in &receivers {
@@ -411,6 +475,10 @@ impl RadioMedium {
             .saturating_add(1)
             .saturating_add(self.cfg.delay_ticks as u64)
             .saturating_add(jitter);
+        self.stats.in_flight += 1;
+        if self.queues[dst].absorb(due) {
+            return;
+        }
         let slot = *slot.get_or_insert_with(|| match self.free.pop() {
             Some(free) => {
                 self.frames[free as usize] = (*copy, 0);
@@ -426,9 +494,9 @@ impl RadioMedium {
             due,
             seq: self.seq,
             slot,
+            surplus: 0,
         });
         self.seq += 1;
-        self.stats.in_flight += 1;
     }
 
     /// Sets the radio groups for the following sends (`None`: everyone may hear everyone).
@@ -498,6 +566,16 @@ impl RadioMedium {
                 } else {
                     release(frames, free, p.slot);
                     stats.count_drop(Reason::InboxFull);
+                }
+                if p.surplus > 0 {
+                    stats.in_flight -= p.surplus as u64;
+                    let why = if can_talk[r] {
+                        debug_assert_eq!(inbox.len(), MAX_INBOX);
+                        Reason::InboxFull
+                    } else {
+                        Reason::ReceiverDown
+                    };
+                    stats.count_drops(why, p.surplus as u64);
                 }
             }
         }

@@ -398,6 +398,58 @@ fn inbox_overflow_delivers_max_inbox_and_drops_the_rest() {
     );
 }
 
+/// Copies beyond a full inbox's worth wait as a count on the last queued copy; they must still
+/// be counted as the per-copy path counts them: inbox full if the receiver talks at delivery,
+/// receiver down if it stopped, and each due tick on its own.
+#[test]
+fn surplus_copies_are_counted_like_queued_ones() {
+    let n = 41;
+    let cfg = RadioConfig {
+        delay_ticks: 1,
+        capacity: 2,
+        ..base_cfg()
+    };
+    let pos: Vec<(f64, f64)> = (0..n).map(|i| (i as f64 * 0.1, 0.0)).collect();
+    let talk = vec![true; n];
+    // Robots 1..=40 each send two frames to robot 0 at ticks 0 and 1: 80 copies per tick.
+    let out: Vec<Vec<Frame>> = (0..n)
+        .map(|i| match i {
+            0 => vec![],
+            _ => vec![frame(0, i as u32), frame(BROADCAST, 1000 + i as u32)],
+        })
+        .collect();
+    let mut m = RadioMedium::new(cfg, 1, n);
+    send(&mut m, 0, &out, &pos, &talk);
+    send(&mut m, 1, &out, &pos, &talk);
+    assert_eq!(m.stats().in_flight, m.stats().sent);
+    // Tick 2: the copies sent at tick 0 are due; robot 0 keeps the first 32 in routing order.
+    let inbox = deliver(&mut m, 2, &talk);
+    let tags: Vec<u32> = inbox[0].iter().map(tag).collect();
+    let expected: Vec<u32> = (1..=16).flat_map(|i| [i, 1000 + i]).collect();
+    assert_eq!(tags, expected);
+    // Everyone hears everyone: robot 0 gets 80 copies, each other robot 39 broadcasts.
+    let s = m.stats();
+    let k = MAX_INBOX as u64;
+    assert_eq!(s.delivered, 41 * k);
+    assert_eq!(s.dropped_inbox_full, (80 - k) + 40 * (39 - k));
+    assert_eq!(s.dropped_receiver_down, 0);
+    // Tick 3: robot 0 is down, so every one of its copies sent at tick 1 is receiver-down,
+    // the counted surplus included; the others' copies are delivered as usual.
+    let mut zero_down = talk.clone();
+    zero_down[0] = false;
+    let before = m.stats();
+    let inbox = deliver(&mut m, 3, &zero_down);
+    assert!(inbox[0].is_empty());
+    let s = m.stats();
+    assert_eq!(s.dropped_receiver_down - before.dropped_receiver_down, 80);
+    assert_eq!(
+        s.dropped_inbox_full - before.dropped_inbox_full,
+        40 * (39 - k)
+    );
+    assert_eq!(s.delivered - before.delivered, 40 * k);
+    assert_eq!(s.in_flight, 0);
+}
+
 #[test]
 fn world_sets_src_and_sent_tick_and_keeps_dst() {
     let mut m = RadioMedium::new(base_cfg(), 1, 2);

@@ -154,21 +154,18 @@ impl ObserveCtx<'_> {
     /// Observes robots `first..first + out.len()`; `rngs` are their noise streams.
     fn observe_range(&self, first: usize, out: &mut [Observation], rngs: &mut [Rng]) {
         // Other robots within `reach`: (centre distance, id), nearest first.
-        let mut near: Vec<(f64, u32)> = Vec::new();
-        let mut bodies: Vec<Body> = Vec::new();
+        let mut scratch = Scratch::default();
         for (k, (o, rng)) in out.iter_mut().zip(rngs).enumerate() {
-            self.observe_one(first + k, o, rng, &mut near, &mut bodies);
+            self.observe_one(first + k, o, rng, &mut scratch);
         }
     }
 
-    fn observe_one(
-        &self,
-        i: usize,
-        o: &mut Observation,
-        rng: &mut Rng,
-        near: &mut Vec<(f64, u32)>,
-        bodies: &mut Vec<Body>,
-    ) {
+    fn observe_one(&self, i: usize, o: &mut Observation, rng: &mut Rng, scratch: &mut Scratch) {
+        let Scratch {
+            near,
+            picked,
+            bodies,
+        } = scratch;
         let (lidar, rb_range, radius, reach) = (self.lidar, self.rb_range, self.radius, self.reach);
         let (noise, goal_sensor) = (self.noise, self.goal_sensor);
         let goal = self.cfg.goal_of(i as u32);
@@ -197,23 +194,27 @@ impl ObserveCtx<'_> {
             }
         });
         // Distances are finite and non-negative here (NaN fails `d <= reach`), so their bits
-        // order as the floats do: integer keys sort the same as `total_cmp`, faster.
-        near.sort_unstable_by_key(|&(d, j)| (d.to_bits(), j));
+        // order as the floats do: integer keys sort the same as `total_cmp`, faster. Only
+        // what each sensor uses is sorted: the bodies within lidar reach, and the nearest
+        // MAX_NEIGHBOURS emitters (a robot in a dense flock has hundreds within 1.5 m).
+        let by_distance = |&(d, j): &(f64, u32)| (d.to_bits(), j);
         if r.lidar_on {
             let rays = (lidar.rays as usize).min(MAX_LIDAR_RAYS);
             // Other robots' bodies (in any state) are obstacles too. Bodies first, nearest
             // first: a ray stops looking once a body's nearest point lies beyond its best hit,
             // and the map is then asked only up to that hit (the hit distance is the same
             // whatever the limit; in a crowd most rays end on a neighbour well before a wall).
-            bodies.clear();
-            bodies.extend(
+            picked.clear();
+            picked.extend(
                 near.iter()
-                    .take_while(|&&(dc, _)| dc - radius <= lidar.range + LIDAR_SKIP_MARGIN)
-                    .map(|&(dc, j)| {
-                        let q = &self.robots[j as usize];
-                        Body::new((r.x, r.y), (q.x, q.y), radius, dc)
-                    }),
+                    .filter(|&&(dc, _)| dc - radius <= lidar.range + LIDAR_SKIP_MARGIN),
             );
+            picked.sort_unstable_by_key(by_distance);
+            bodies.clear();
+            bodies.extend(picked.iter().map(|&(dc, j)| {
+                let q = &self.robots[j as usize];
+                Body::new((r.x, r.y), (q.x, q.y), radius, dc)
+            }));
             for k in 0..rays {
                 let angle = r.theta + self.ray_angles[k];
                 let dir = (angle.cos(), angle.sin());
@@ -237,16 +238,20 @@ impl ObserveCtx<'_> {
             }
             o.lidar_len = rays as u16;
         }
-        // Range-and-bearing: other robots with their emitter on, nearest first.
+        // Range-and-bearing: the nearest MAX_NEIGHBOURS other robots with their emitter on,
+        // nearest first (selected, then only those sorted).
+        picked.clear();
+        picked.extend(near.iter().filter(|&&(d, j)| {
+            d <= rb_range && self.robots[j as usize].state == RobotState::Active
+        }));
+        if picked.len() > MAX_NEIGHBOURS {
+            picked.select_nth_unstable_by_key(MAX_NEIGHBOURS - 1, by_distance);
+            picked.truncate(MAX_NEIGHBOURS);
+        }
+        picked.sort_unstable_by_key(by_distance);
         let mut seen = 0;
-        for &(d, j) in near.iter() {
-            if seen == MAX_NEIGHBOURS || d > rb_range {
-                break;
-            }
+        for &(d, j) in picked.iter() {
             let q = &self.robots[j as usize];
-            if q.state != RobotState::Active {
-                continue;
-            }
             o.neighbours[seen] = Neighbour {
                 id: j,
                 range: d,
@@ -282,6 +287,17 @@ impl ObserveCtx<'_> {
 /// Metres a robot body's nearest point must lie beyond a ray's best hit before the ray stops
 /// testing bodies (rounding in [`Body::hit`] is ~1e-15 m at these distances).
 const LIDAR_SKIP_MARGIN: f64 = 1e-9;
+
+/// One thread's buffers for [`ObserveCtx::observe_one`], kept from robot to robot.
+#[derive(Default)]
+struct Scratch {
+    /// Other robots within reach: (centre distance, id), in grid order.
+    near: Vec<(f64, u32)>,
+    /// The part of `near` one sensor uses, sorted nearest first.
+    picked: Vec<(f64, u32)>,
+    /// The lidar's bodies, nearest first.
+    bodies: Vec<Body>,
+}
 
 /// Another robot's body as the lidar rays of one robot see it: the parts of the ray-circle
 /// test that do not depend on the ray, worked out once for all rays (same arithmetic, same
