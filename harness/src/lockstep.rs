@@ -6,8 +6,12 @@ use swarmrt_agent::consensus::raft::{MutantScope, Persistent};
 use swarmrt_protocol::{Command, Observation, RobotState};
 use swarmrt_scenario::Config;
 use swarmrt_world::map::MapError;
-use swarmrt_world::world::{OBSERVE_THREADS, PARALLEL_OBSERVE_MIN};
+use swarmrt_world::world::OBSERVE_THREADS;
 use swarmrt_world::{Event, ProcessSignal, World};
+
+/// Robots from which [`Lockstep::think`] splits them over threads: a robot thinks in ~1-2 us
+/// (observing takes several times that), so below this a thread costs more than it saves.
+pub const PARALLEL_THINK_MIN: usize = 256;
 
 /// A world and its robots, stepped tick by tick.
 pub struct Lockstep {
@@ -73,7 +77,7 @@ impl Lockstep {
     /// The second phase: every robot whose process would run answers its observation (and,
     /// with storage on, makes its persistent state durable first, as its process does).
     ///
-    /// From [`PARALLEL_OBSERVE_MIN`] robots on, the robots are split into contiguous ranges
+    /// From [`PARALLEL_THINK_MIN`] robots on, the robots are split into contiguous ranges
     /// that think on scoped threads, as [`World::observe`] splits them: each robot's core reads
     /// only its own observation and state, so the commands are the same bytes in any split.
     pub fn think(&mut self) {
@@ -81,7 +85,7 @@ impl Lockstep {
         self.commands.clear();
         self.commands.resize(n, None);
         let storing = self.storing;
-        let threads = if n >= PARALLEL_OBSERVE_MIN {
+        let threads = if n >= PARALLEL_THINK_MIN {
             std::thread::available_parallelism()
                 .map(|p| p.get())
                 .unwrap_or(1)

@@ -239,16 +239,25 @@ impl ObserveCtx<'_> {
             o.lidar_len = rays as u16;
         }
         // Range-and-bearing: the nearest MAX_NEIGHBOURS other robots with their emitter on,
-        // nearest first (selected, then only those sorted).
-        picked.clear();
-        picked.extend(near.iter().filter(|&&(d, j)| {
-            d <= rb_range && self.robots[j as usize].state == RobotState::Active
-        }));
-        if picked.len() > MAX_NEIGHBOURS {
-            picked.select_nth_unstable_by_key(MAX_NEIGHBOURS - 1, by_distance);
+        // nearest first. When the lidar already sorted everything within reach, that list
+        // serves; otherwise select the nearest, then sort only those.
+        let sorted_all = r.lidar_on && picked.len() == near.len();
+        if sorted_all {
+            picked.retain(|&(d, j)| {
+                d <= rb_range && self.robots[j as usize].state == RobotState::Active
+            });
             picked.truncate(MAX_NEIGHBOURS);
+        } else {
+            picked.clear();
+            picked.extend(near.iter().filter(|&&(d, j)| {
+                d <= rb_range && self.robots[j as usize].state == RobotState::Active
+            }));
+            if picked.len() > MAX_NEIGHBOURS {
+                picked.select_nth_unstable_by_key(MAX_NEIGHBOURS - 1, by_distance);
+                picked.truncate(MAX_NEIGHBOURS);
+            }
+            picked.sort_unstable_by_key(by_distance);
         }
-        picked.sort_unstable_by_key(by_distance);
         let mut seen = 0;
         for &(d, j) in picked.iter() {
             let q = &self.robots[j as usize];
