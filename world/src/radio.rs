@@ -57,7 +57,10 @@
 //! Broadcast receivers are found with the world's spatial grid ([`Grid`]) over the talking
 //! robots, with cells of side `range`, rebuilt in place at each [`RadioMedium::send`] that has
 //! a broadcast to route (receivers sorted by id afterwards), so a send costs about
-//! O(N + copies · log) rather than O(N²). In-flight copies wait in one min-heap per receiver.
+//! O(N + copies · log) rather than O(N²). In-flight copies wait in one queue per receiver: a
+//! FIFO without jitter (arrival order is then due order), a min-heap with it; copies that can
+//! only find a full inbox wait as a count. Inboxes hold slots of one frame store, so every
+//! copy of a broadcast is the same 152 bytes in memory once.
 
 use std::cmp::Ordering;
 use std::collections::{BTreeSet, BinaryHeap, VecDeque};
