@@ -40,7 +40,8 @@ pub struct Row {
     pub payload: usize,
     /// Round-trip latency, ns.
     pub rtt_ns: Summary,
-    /// One-way throughput, messages per second (counted by the receiver).
+    /// One-way throughput, messages per second (counted by the receiver; the median of the
+    /// throughput windows).
     pub msgs_per_s: f64,
     /// One-way throughput, bytes per second.
     pub bytes_per_s: f64,
@@ -48,6 +49,16 @@ pub struct Row {
     pub sent: u64,
     /// Messages the receiver counted (equal to `sent`: every transport here is lossless).
     pub received: u64,
+    /// Throughput of each window of the throughput phase (`msgs_per_s` is their median).
+    #[serde(default)]
+    pub window_msgs_per_s: Vec<f64>,
+    /// CPU seconds the sender used in the throughput phase.
+    #[serde(default)]
+    pub sender_cpu_secs: f64,
+    /// Times the sender was preempted in the throughput phase (about one per message: the
+    /// pair shared a core with each other or with other load).
+    #[serde(default)]
+    pub sender_involuntary_switches: i64,
     /// Median round trip divided by the baseline's at this payload (lower is faster).
     pub rtt_vs_baseline: f64,
     /// Throughput divided by the baseline's at this payload (higher is faster).
@@ -209,6 +220,9 @@ pub fn run(args: &IpcOptions, interrupt: &Interrupt) -> SwarmResult<()> {
                     bytes_per_s: r.bytes_per_s,
                     sent: r.sent,
                     received: r.received,
+                    window_msgs_per_s: r.window_msgs_per_s,
+                    sender_cpu_secs: r.cpu_secs,
+                    sender_involuntary_switches: r.involuntary_switches,
                     ..Row::default()
                 },
                 Err(e) => {

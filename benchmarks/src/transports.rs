@@ -8,9 +8,10 @@
 //! place (iceoryx2) or reads the whole message out of the socket.
 //!
 //! The ping measures round trips (send, wait for the echo) for half its time, then sends
-//! `DATA` messages back to back for the other half and ends with `END`, which the pong
-//! answers with how many `DATA` it counted: throughput is messages over the time from the
-//! first send to that answer, so nothing still queued is counted as delivered.
+//! `DATA` messages back to back for the other half, in [`THROUGHPUT_WINDOWS`] windows that
+//! each end with `END`, which the pong answers with how many `DATA` it counted: a window's
+//! throughput is its messages over the time from its first send to that answer, so nothing
+//! still queued is counted as delivered, and the reported throughput is the median window.
 
 use std::io::{Read, Write};
 use std::time::{Duration, Instant};
@@ -48,6 +49,10 @@ const MAX_RTT_SAMPLES: usize = 2_000_000;
 const POLL_YIELD_EVERY: u32 = 256;
 /// Subscriber queue of the iceoryx2 pairs (lossless: safe overflow off, sender retries).
 const IOX2_BUFFER: usize = 16;
+/// Windows of the throughput phase. The rate is their median (as the round trip is a
+/// median), so a burst of load from another process that starves the receiver's wake-ups
+/// for part of the phase does not become the row's number; the spread stays in the JSON.
+pub const THROUGHPUT_WINDOWS: usize = 5;
 
 /// A message header.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -97,12 +102,45 @@ pub struct PingResult {
     pub sent: u64,
     /// Messages the pong counted.
     pub received: u64,
-    /// Seconds from the first DATA to the pong's count.
+    /// Seconds of the throughput windows (each from its first DATA to the pong's count).
     pub secs: f64,
-    /// received / secs.
+    /// Median over the windows of received / seconds.
     pub msgs_per_s: f64,
-    /// received * payload / secs.
+    /// `msgs_per_s` * payload.
     pub bytes_per_s: f64,
+    /// Each window's messages per second, in order (their spread shows a disturbed phase).
+    #[serde(default)]
+    pub window_msgs_per_s: Vec<f64>,
+    /// CPU seconds the sending thread used in the throughput phase (0 when not measured).
+    #[serde(default)]
+    pub cpu_secs: f64,
+    /// Times the sending thread was preempted in the throughput phase (0 when not measured): about
+    /// one per message means sender and receiver shared a core and woke each other.
+    #[serde(default)]
+    pub involuntary_switches: i64,
+}
+
+/// The calling thread's CPU seconds (user + system) and involuntary context switches.
+fn cpu_usage() -> (f64, i64) {
+    // SAFETY: an all-zero rusage is valid; getrusage only writes the struct we pass.
+    let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: as above.
+    if unsafe { libc::getrusage(libc::RUSAGE_THREAD, &mut ru) } != 0 {
+        return (0.0, 0);
+    }
+    let secs = |tv: libc::timeval| tv.tv_sec as f64 + tv.tv_usec as f64 * 1e-6;
+    (secs(ru.ru_utime) + secs(ru.ru_stime), ru.ru_nivcsw)
+}
+
+/// Median of `v` (mean of the middle two for an even count; `NaN` when empty).
+fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_unstable_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => (v[n / 2 - 1] + v[n / 2]) / 2.0,
+    }
 }
 
 /// The measuring side, over any endpoint.
@@ -144,52 +182,73 @@ pub fn run_ping(ep: &mut dyn Endpoint, payload: usize, secs: f64) -> anyhow::Res
         seq += 1;
     }
 
-    let start = Instant::now();
-    let mut sent = 0u64;
-    while start.elapsed() < half || sent < 10 {
+    let window = half / THROUGHPUT_WINDOWS as u32;
+    let (mut sent, mut received, mut secs_total) = (0u64, 0u64, 0.0f64);
+    let mut rates = Vec::with_capacity(THROUGHPUT_WINDOWS);
+    let usage_before = cpu_usage();
+    for _ in 0..THROUGHPUT_WINDOWS {
+        let start = Instant::now();
+        let mut n = 0u64;
+        while start.elapsed() < window || n < 10 {
+            encode(
+                &mut buf,
+                Header {
+                    kind: DATA,
+                    seq,
+                    value: 0,
+                },
+            );
+            ep.send(&buf)?;
+            n += 1;
+            seq += 1;
+        }
         encode(
             &mut buf,
             Header {
-                kind: DATA,
+                kind: END,
                 seq,
                 value: 0,
             },
         );
         ep.send(&buf)?;
-        sent += 1;
+        let h = ep.recv()?;
+        let elapsed = start.elapsed().as_secs_f64();
+        if h.kind != ACK || h.seq != seq {
+            bail!("expected the pong's count for END {seq}, got {h:?}");
+        }
+        if h.value != n {
+            bail!(
+                "sent {n} messages in a window but the pong counted {}",
+                h.value
+            );
+        }
         seq += 1;
+        sent += n;
+        received += h.value;
+        secs_total += elapsed;
+        rates.push(h.value as f64 / elapsed);
     }
+    let usage_after = cpu_usage();
     encode(
         &mut buf,
         Header {
-            kind: END,
+            kind: STOP,
             seq,
             value: 0,
         },
     );
     ep.send(&buf)?;
-    let h = ep.recv()?;
-    let elapsed = start.elapsed().as_secs_f64();
-    if h.kind != ACK {
-        bail!("expected the pong's count, got {h:?}");
-    }
-    encode(
-        &mut buf,
-        Header {
-            kind: STOP,
-            seq: seq + 1,
-            value: 0,
-        },
-    );
-    ep.send(&buf)?;
-    let received = h.value;
+    let msgs_per_s = median(&rates);
     Ok(PingResult {
         rtt_ns: summarize(&mut rtts),
         sent,
         received,
-        secs: elapsed,
-        msgs_per_s: received as f64 / elapsed,
-        bytes_per_s: (received as f64 * payload as f64) / elapsed,
+        secs: secs_total,
+        msgs_per_s,
+        bytes_per_s: msgs_per_s * payload as f64,
+        window_msgs_per_s: rates,
+        cpu_secs: usage_after.0 - usage_before.0,
+        involuntary_switches: usage_after.1 - usage_before.1,
     })
 }
 
@@ -383,8 +442,27 @@ fn with_iox2_endpoint<T>(
                 "waitset",
             )?;
             let listener = &side.listener;
+            let subscriber = &side.subscriber;
             let _guard = iox(waitset.attach_notification(listener), "attach")?;
             let mut wait = |t: Duration| -> anyhow::Result<()> {
+                // The WaitSet sleeps on the listener's socket only, but iceoryx2's notifier
+                // writes to that socket only while the listener's shared state is not
+                // "notified" (later notifies just set a bit). A drain that races a notify
+                // (state reset, the notify's datagram written, then eaten by the same drain)
+                // leaves the state "notified" with an empty socket: from then on no notify
+                // reaches the socket and the WaitSet sleeps until its timeout (the 20 s hang).
+                // So arm before sleeping: drain until a drain finds nothing (which resets the
+                // state, and a drain that raced a notify counts that notify's event), then
+                // re-check the queue, as every sample that was notified before is in it.
+                loop {
+                    let drained = iox(listener.try_wait(|_| {}), "listener drain")?;
+                    if iox(subscriber.has_samples(), "has_samples")? {
+                        return Ok(());
+                    }
+                    if drained == 0 {
+                        break;
+                    }
+                }
                 iox(
                     waitset.wait_and_process_once_with_timeout(
                         |_| {
