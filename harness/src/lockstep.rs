@@ -6,7 +6,7 @@ use swarmrt_agent::consensus::raft::{MutantScope, Persistent};
 use swarmrt_protocol::{Command, Observation, RobotState};
 use swarmrt_scenario::Config;
 use swarmrt_world::map::MapError;
-use swarmrt_world::world::OBSERVE_THREADS;
+use swarmrt_world::world::worker_threads;
 use swarmrt_world::{Event, ProcessSignal, World};
 
 /// Robots from which [`Lockstep::think`] splits them over threads: a robot thinks in ~1-2 us
@@ -85,14 +85,7 @@ impl Lockstep {
         self.commands.clear();
         self.commands.resize(n, None);
         let storing = self.storing;
-        let threads = if n >= PARALLEL_THINK_MIN {
-            std::thread::available_parallelism()
-                .map(|p| p.get())
-                .unwrap_or(1)
-                .min(OBSERVE_THREADS)
-        } else {
-            1
-        };
+        let threads = worker_threads(n, PARALLEL_THINK_MIN);
         let think = |agents: &mut [Agent],
                      obs: &[Observation],
                      stored: &mut [Option<Persistent>],

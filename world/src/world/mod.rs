@@ -38,7 +38,7 @@ mod stage_times;
 
 use faults::Outage;
 pub use faults::ProcessSignal;
-pub use sensing::{OBSERVE_THREADS, PARALLEL_OBSERVE_MIN};
+pub use sensing::{OBSERVE_THREADS, PARALLEL_OBSERVE_MIN, worker_threads};
 pub use stage_times::{Stage, StageTimes};
 
 /// The truth about one robot.

@@ -22,15 +22,7 @@ impl World {
     /// process mode the robots sleep while the world observes, so the other cores are free
     /// (a scoped thread costs ~50 us here; at 100 robots two threads take 226 us, one 290 us).
     pub fn observe(&mut self, out: &mut [Observation]) {
-        let threads = if self.robots.len() >= PARALLEL_OBSERVE_MIN {
-            std::thread::available_parallelism()
-                .map(|p| p.get())
-                .unwrap_or(1)
-                .min(OBSERVE_THREADS)
-        } else {
-            1
-        };
-        self.observe_on(out, threads);
+        self.observe_on(out, worker_threads(self.robots.len(), PARALLEL_OBSERVE_MIN));
     }
 
     /// [`World::observe`] on exactly `threads` threads (at least one): the same bytes for
@@ -130,6 +122,18 @@ fn gauss(rng: &mut Rng, sd: f64) -> f64 {
 pub const PARALLEL_OBSERVE_MIN: usize = 64;
 /// Most threads [`World::observe`] uses.
 pub const OBSERVE_THREADS: usize = 4;
+
+/// Threads to split `n` robots over: one below `min` robots, else one per core up to
+/// [`OBSERVE_THREADS`] (shared by observing here and thinking in the in-process loop).
+pub fn worker_threads(n: usize, min: usize) -> usize {
+    if n < min {
+        return 1;
+    }
+    std::thread::available_parallelism()
+        .map(|p| p.get())
+        .unwrap_or(1)
+        .min(OBSERVE_THREADS)
+}
 
 /// What one observation reads: shared by every robot of a tick.
 struct ObserveCtx<'a> {
