@@ -211,7 +211,7 @@ pub fn run(
             Err(ListenerWaitError::InterruptSignal) => {}
             Err(e) => return Err(e.into()),
         }
-        if node.wait(Duration::ZERO).is_err() {
+        if ipc::termination_requested(&node) {
             return Ok(Exit::Terminated);
         }
     }

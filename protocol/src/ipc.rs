@@ -87,6 +87,15 @@ pub fn node(run: &RunServices, name: &str) -> Result<Node<Svc>, IpcError> {
         .create::<Svc>()?)
 }
 
+/// True once SIGINT or SIGTERM reached this process (iceoryx2's handler notes it), for a
+/// node that handles termination requests: the check [`Node::wait`] makes, without its
+/// `nanosleep`. A zero-length sleep is still a syscall and a trip through the scheduler, which
+/// every robot paid once a tick (~4 % of a goto robot's CPU at 100 robots, by perf).
+pub fn termination_requested(node: &Node<Svc>) -> bool {
+    node.signal_handling_mode() == SignalHandlingMode::HandleTerminationRequests
+        && iceoryx2_bb_posix::signal::SignalHandler::termination_requested()
+}
+
 fn service_name(s: &str) -> Result<ServiceName, IpcError> {
     Ok(ServiceName::new(s).map_err(|e| format!("service name {s}: {e:?}"))?)
 }

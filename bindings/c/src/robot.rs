@@ -231,7 +231,7 @@ impl Robot {
                 Err(ListenerWaitError::InterruptSignal) => {}
                 Err(e) => return Err(Error::Ipc(format!("wait: {e:?}"))),
             }
-            if self.node.wait(Duration::ZERO).is_err() {
+            if ipc::termination_requested(&self.node) {
                 self.ended = Some(Step::Terminated);
                 return Ok(Step::Terminated);
             }

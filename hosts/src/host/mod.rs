@@ -438,7 +438,7 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
         };
         match ports.listener.timed_wait(|_| {}, timeout) {
             Ok(_) | Err(ListenerWaitError::InterruptSignal) => {
-                if node.wait(Duration::ZERO).is_err() {
+                if ipc::termination_requested(&node) {
                     failure = Some("terminated by a signal".into());
                     break 'run;
                 }
