@@ -108,3 +108,97 @@ impl Recorder {
         self.trajectory.write_all(self.buf.as_bytes())
     }
 }
+
+/// What the [`RecordWriter`] thread is asked to write.
+enum Job {
+    Tick(u64, Vec<Robot>, Vec<Event>),
+    Events(Vec<Event>),
+}
+
+/// Ticks the writer may fall behind before [`RecordWriter::record`] waits for it.
+const WRITER_BACKLOG: usize = 64;
+
+/// A [`Recorder`] on its own thread: the world hands over a copy of each tick's robots and
+/// its events and goes on, so formatting and writing the rows (~17 us of a ~300 us tick at
+/// 10 robots) overlap the robots' turn instead of adding to the tick. One writer takes the
+/// jobs in order, so the files hold the same bytes as with a [`Recorder`]; dropping the
+/// writer (or [`RecordWriter::finish`]) waits until everything handed over is written.
+pub struct RecordWriter {
+    tx: Option<std::sync::mpsc::SyncSender<Job>>,
+    thread: Option<std::thread::JoinHandle<std::io::Result<()>>>,
+}
+
+impl RecordWriter {
+    /// Creates the files as [`Recorder::create`] does and starts the writer thread.
+    pub fn create(dir: &Path, aerial: bool) -> std::io::Result<RecordWriter> {
+        let mut recorder = Recorder::create(dir, aerial)?;
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Job>(WRITER_BACKLOG);
+        let thread = std::thread::Builder::new()
+            .name("records".into())
+            .spawn(move || {
+                for job in rx {
+                    match job {
+                        Job::Tick(tick, robots, events) => {
+                            recorder.record(tick, &robots, &events)?
+                        }
+                        Job::Events(events) => recorder.record_events(&events)?,
+                    }
+                }
+                Ok(())
+            })?;
+        Ok(RecordWriter {
+            tx: Some(tx),
+            thread: Some(thread),
+        })
+    }
+
+    /// [`Recorder::record`], written by the thread. An error is the thread's first write
+    /// error (after which it has stopped).
+    pub fn record(
+        &mut self,
+        tick: u64,
+        robots: &[Robot],
+        events: Vec<Event>,
+    ) -> std::io::Result<()> {
+        self.send(Job::Tick(tick, robots.to_vec(), events))
+    }
+
+    /// [`Recorder::record_events`], written by the thread.
+    pub fn record_events(&mut self, events: Vec<Event>) -> std::io::Result<()> {
+        if events.is_empty() {
+            return Ok(());
+        }
+        self.send(Job::Events(events))
+    }
+
+    /// Waits until everything handed over is written; the first write error, if any.
+    pub fn finish(mut self) -> std::io::Result<()> {
+        self.join()
+    }
+
+    fn send(&mut self, job: Job) -> std::io::Result<()> {
+        let sent = self.tx.as_ref().map(|tx| tx.send(job).is_ok());
+        if sent == Some(true) {
+            return Ok(());
+        }
+        // The thread is gone: it stopped at a write error, which joining returns.
+        self.join()?;
+        Err(std::io::Error::other("the record writer has stopped"))
+    }
+
+    fn join(&mut self) -> std::io::Result<()> {
+        self.tx = None;
+        match self.thread.take().map(std::thread::JoinHandle::join) {
+            None => Ok(()),
+            Some(Ok(result)) => result,
+            Some(Err(_)) => Err(std::io::Error::other("the record writer panicked")),
+        }
+    }
+}
+
+impl Drop for RecordWriter {
+    fn drop(&mut self) {
+        // A run ending in an error still leaves every tick it handed over on disk.
+        let _ = self.join();
+    }
+}

@@ -23,7 +23,7 @@ use swarmrt_protocol::{
 };
 use swarmrt_scenario::Config;
 
-use crate::records::Recorder;
+use crate::records::RecordWriter;
 use crate::timing::{TickPhases, TickTimer, TickTiming};
 use crate::world::{ProcessSignal, World};
 
@@ -317,7 +317,7 @@ fn wait(
     timeout: Duration,
 ) -> Result<bool, IpcError> {
     match listener.timed_wait(|_| {}, timeout) {
-        Ok(_) | Err(ListenerWaitError::InterruptSignal) => Ok(node.wait(Duration::ZERO).is_err()),
+        Ok(_) | Err(ListenerWaitError::InterruptSignal) => Ok(ipc::termination_requested(node)),
         Err(e) => Err(e.into()),
     }
 }
@@ -364,7 +364,7 @@ pub fn run(
     let n = cfg.robots.count as usize;
     let realtime = mode == Mode::Realtime;
     let mut world = World::new(cfg, vocabulary).map_err(|e| format!("{}: {}", e.key, e.message))?;
-    let mut recorder = Recorder::create(out_dir, cfg.robots.aerial.is_some())?;
+    let mut recorder = RecordWriter::create(out_dir, cfg.robots.aerial.is_some())?;
 
     match ipc::raise_fd_limit() {
         Ok(limit) if limit < 8 * n as u64 + 64 => {
@@ -466,7 +466,7 @@ pub fn run(
     // Robots restarted by the schedule whose fresh process has not said hello yet.
     let mut reborn: BTreeSet<u32> = BTreeSet::new();
     let events = world.drain_events();
-    recorder.record(world.tick(), world.robots(), &events)?;
+    recorder.record(world.tick(), world.robots(), events)?;
     let period = Duration::from_secs_f64(cfg.scenario.dt);
     let mut standing = Standing::new(n);
     let mut rt_stats = RealtimeStats {
@@ -666,7 +666,7 @@ pub fn run(
         world.step(&commands);
         let events = world.drain_events();
         let t4 = Instant::now();
-        recorder.record(world.tick(), world.robots(), &events)?;
+        recorder.record(world.tick(), world.robots(), events)?;
         let t5 = Instant::now();
         let ns = |a: Instant, b: Instant| (b - a).as_nanos() as u64;
         timer.add(TickPhases {
@@ -705,7 +705,8 @@ pub fn run(
         r.finish(world.tick(), &mut stats);
     }
     // Deaths marked after the last recorded tick: events only, the tick's rows exist.
-    recorder.record_events(&world.drain_events())?;
+    recorder.record_events(world.drain_events())?;
+    recorder.finish()?;
     stats.timing = timer.summary();
     let mut metrics = serde_json::to_value(world.metrics())?;
     metrics["shell"] = serde_json::to_value(&stats)?;
