@@ -68,6 +68,10 @@ pub struct SwarmArgs {
     /// Ticks per in-process measurement (it also stops after 20 s).
     #[arg(long, default_value_t = 100)]
     pub in_process_ticks: u64,
+    /// Rounds of runtime and floor runs, alternated; the ratio is the median over rounds
+    /// (the floor's tick varies by up to 2x between runs on a shared VM).
+    #[arg(long, default_value_t = 1)]
+    pub rounds: u32,
     /// The scenario the runtime runs (robots.count and the map are set per N).
     #[arg(long, default_value = "configs/goto_simple.toml")]
     pub config: PathBuf,
@@ -98,6 +102,7 @@ impl From<&SwarmArgs> for SwarmOptions {
             ticks: a.ticks,
             in_process_agents: a.in_process_agents.clone(),
             in_process_ticks: a.in_process_ticks,
+            rounds: a.rounds,
             config: a.config.clone(),
             json: a.json,
             out: a.out.clone(),
@@ -147,6 +152,7 @@ mod tests {
         assert_eq!(o.ticks, 300);
         assert_eq!(o.in_process_agents, vec![100, 1000, 10000]);
         assert_eq!(o.in_process_ticks, 100);
+        assert_eq!(o.rounds, 1);
         assert_eq!(o.config, PathBuf::from("configs/goto_simple.toml"));
         assert_eq!(o.out, Some(PathBuf::from("x")));
     }

@@ -34,6 +34,8 @@ const IN_PROCESS_BUDGET: Duration = Duration::from_secs(20);
 /// Most robot processes this command starts (each costs ~1.4 MB PSS and a few descriptors
 /// in the world; see docs/benchmarks.md for where it stops).
 pub const MAX_PROCESS_AGENTS: u32 = 5_000;
+/// Most `--rounds`.
+pub const MAX_ROUNDS: u32 = 50;
 
 /// What `swarm bench swarm` measures (its command-line options, without clap).
 #[derive(Debug, Clone, PartialEq)]
@@ -46,6 +48,8 @@ pub struct SwarmOptions {
     pub in_process_agents: Vec<u32>,
     /// Ticks per in-process measurement; it also stops after 20 s (`--in-process-ticks`).
     pub in_process_ticks: u64,
+    /// Rounds of runtime and floor runs, alternated, in 1..=[`MAX_ROUNDS`] (`--rounds`).
+    pub rounds: u32,
     /// The scenario the runtime runs; robots.count and the map are set per N (`--config`).
     pub config: PathBuf,
     /// Print the results as JSON instead of tables (`--json`).
@@ -59,6 +63,8 @@ pub struct SwarmOptions {
 pub struct RuntimeRow {
     /// Robot processes.
     pub agents: u32,
+    /// Which round (from 1) of `--rounds`.
+    pub round: u32,
     /// Ticks the world stepped.
     pub ticks: u64,
     /// Ticks per second while ticking.
@@ -88,6 +94,8 @@ pub struct RuntimeRow {
 pub struct FloorRow {
     /// Robot processes.
     pub agents: u32,
+    /// Which round (from 1) of `--rounds`.
+    pub round: u32,
     /// What the floor world measured.
     pub result: Option<FloorResult>,
     /// Ticks per second while ticking.
@@ -103,10 +111,14 @@ pub struct FloorRow {
 pub struct Comparison {
     /// Robot processes.
     pub agents: u32,
-    /// Runtime median tick / floor median tick.
+    /// Runtime median tick / floor median tick; with several rounds, the median of
+    /// `ratios`.
     pub median_ratio: f64,
-    /// Runtime p99 tick / floor p99 tick.
+    /// Runtime p99 tick / floor p99 tick (the median over rounds).
     pub p99_ratio: f64,
+    /// Each round's runtime median / floor median, in round order (rounds that failed are
+    /// left out).
+    pub ratios: Vec<f64>,
 }
 
 /// In-process at one N.
@@ -222,6 +234,12 @@ fn validate(args: &SwarmOptions) -> SwarmResult<()> {
     if args.in_process_ticks == 0 {
         return user("--in-process-ticks: expected at least 1".into());
     }
+    if args.rounds == 0 || args.rounds > MAX_ROUNDS {
+        return user(format!(
+            "--rounds: expected 1..={MAX_ROUNDS}, got {}",
+            args.rounds
+        ));
+    }
     Ok(())
 }
 
@@ -248,39 +266,42 @@ pub fn run(args: &SwarmOptions, interrupt: &Interrupt) -> SwarmResult<()> {
         out: out.display().to_string(),
         ..SwarmReport::default()
     };
-    let pb = progress((scenarios.len() * 2 + in_proc.len()) as u64);
-    for (n, cfg) in &scenarios {
-        pb.set_message(format!("runtime, {n} robots"));
-        let dir = out.join("runs").join(format!("n{n}"));
-        let row = runtime_run(cfg, &dir, interrupt, &mut report.run_ids);
-        interrupt.check()?;
-        if let Some(e) = &row.error {
-            tracing::warn!("runtime with {n} robots failed: {e}");
+    let rounds = args.rounds;
+    let pb = progress((scenarios.len() as u64 * 2) * rounds as u64 + in_proc.len() as u64);
+    for round in 1..=rounds {
+        for (n, cfg) in &scenarios {
+            let of = if rounds > 1 {
+                format!(", round {round} of {rounds}")
+            } else {
+                String::new()
+            };
+            pb.set_message(format!("runtime, {n} robots{of}"));
+            let name = if rounds > 1 {
+                format!("n{n}-r{round}")
+            } else {
+                format!("n{n}")
+            };
+            let dir = out.join("runs").join(name);
+            let mut row = runtime_run(cfg, &dir, interrupt, &mut report.run_ids);
+            row.round = round;
+            interrupt.check()?;
+            if let Some(e) = &row.error {
+                tracing::warn!("runtime with {n} robots failed: {e}");
+            }
+            report.runtime.push(row);
+            pb.inc(1);
+            pb.set_message(format!("floor, {n} robots{of}"));
+            let mut row = floor_run(*n, args.ticks, interrupt, &mut report.run_ids);
+            row.round = round;
+            interrupt.check()?;
+            if let Some(e) = &row.error {
+                tracing::warn!("floor with {n} robots failed: {e}");
+            }
+            report.floor.push(row);
+            pb.inc(1);
         }
-        report.runtime.push(row);
-        pb.inc(1);
-        pb.set_message(format!("floor, {n} robots"));
-        let row = floor_run(*n, args.ticks, interrupt, &mut report.run_ids);
-        interrupt.check()?;
-        if let Some(e) = &row.error {
-            tracing::warn!("floor with {n} robots failed: {e}");
-        }
-        report.floor.push(row);
-        pb.inc(1);
     }
-    report.comparison = report
-        .runtime
-        .iter()
-        .zip(&report.floor)
-        .filter_map(|(r, f)| {
-            let fr = f.result.as_ref()?;
-            (r.error.is_none()).then(|| Comparison {
-                agents: r.agents,
-                median_ratio: r.tick_ms_median / (fr.tick_ns.median / 1e6),
-                p99_ratio: r.tick_ms_p99 / (fr.tick_ns.p99 / 1e6),
-            })
-        })
-        .collect();
+    report.comparison = compare(&report.runtime, &report.floor);
     for (n, cfg) in &in_proc {
         pb.set_message(format!("in-process, {n} robots"));
         let row = in_process(cfg, interrupt).unwrap_or_else(|e| InProcessRow {
@@ -585,13 +606,28 @@ pub fn table(r: &SwarmReport) -> String {
             Some(FloorRow { error: Some(e), .. }) => format!("failed: {e}"),
             _ => "-".into(),
         };
-        let ratio = r
-            .comparison
-            .iter()
-            .find(|c| c.agents == rt.agents)
-            .map(|c| format!("{:.2}x", c.median_ratio))
-            .unwrap_or_else(|| "-".into());
+        // This row's own ratio (its round's pair).
+        let ratio = match (&rt.error, fl.and_then(|f| f.result.as_ref())) {
+            (None, Some(f)) => format!("{:.2}x", rt.tick_ms_median / (f.tick_ns.median / 1e6)),
+            _ => "-".into(),
+        };
         let _ = writeln!(s, "{:>5} | {left} | {right} | {ratio:>6}", rt.agents);
+    }
+    if r.runtime.iter().any(|x| x.round > 1) {
+        let _ = writeln!(s, "\nruntime / floor, median over rounds (min - max)");
+        for c in &r.comparison {
+            let lo = c.ratios.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = c.ratios.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let _ = writeln!(
+                s,
+                "{:>5}   {:.2}x ({:.2}x - {:.2}x) over {} rounds",
+                c.agents,
+                c.median_ratio,
+                lo,
+                hi,
+                c.ratios.len()
+            );
+        }
     }
     let _ = writeln!(s, "\nwhere a runtime tick goes (mean ms per tick)");
     let _ = writeln!(
@@ -672,6 +708,65 @@ fn ms(v: f64) -> String {
     }
 }
 
+/// The runtime / floor ratios of each round's pair (the runtime and floor rows of one round
+/// and N), and per N the median over rounds, in the order the counts were given.
+fn compare(runtime: &[RuntimeRow], floor: &[FloorRow]) -> Vec<Comparison> {
+    let mut out: Vec<(Comparison, Vec<f64>)> = Vec::new();
+    for (r, f) in runtime.iter().zip(floor) {
+        let Some(fr) = f.result.as_ref().filter(|_| r.error.is_none()) else {
+            continue;
+        };
+        let (median, p99) = (
+            r.tick_ms_median / (fr.tick_ns.median / 1e6),
+            r.tick_ms_p99 / (fr.tick_ns.p99 / 1e6),
+        );
+        match out.iter_mut().find(|(c, _)| c.agents == r.agents) {
+            Some((c, p99s)) => {
+                c.ratios.push(median);
+                p99s.push(p99);
+            }
+            None => out.push((
+                Comparison {
+                    agents: r.agents,
+                    ratios: vec![median],
+                    ..Comparison::default()
+                },
+                vec![p99],
+            )),
+        }
+    }
+    out.into_iter()
+        .map(|(mut c, p99s)| {
+            c.median_ratio = median(&c.ratios);
+            c.p99_ratio = median(&p99s);
+            c
+        })
+        .collect()
+}
+
+/// The median of `v` (the mean of the middle two for an even count); NaN when empty.
+fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => (v[n / 2 - 1] + v[n / 2]) / 2.0,
+    }
+}
+
+/// One point per N, the median of its rounds' values, in the order the counts first come.
+fn per_n_median(points: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+    let mut by_n: Vec<(f64, Vec<f64>)> = Vec::new();
+    for (x, y) in points {
+        match by_n.iter_mut().find(|(n, _)| *n == x) {
+            Some((_, ys)) => ys.push(y),
+            None => by_n.push((x, vec![y])),
+        }
+    }
+    by_n.into_iter().map(|(x, ys)| (x, median(&ys))).collect()
+}
+
 fn plots(r: &SwarmReport, dir: &Path) -> anyhow::Result<()> {
     let ok_rt: Vec<&RuntimeRow> = r.runtime.iter().filter(|x| x.error.is_none()).collect();
     let ok_fl: Vec<(&FloorRow, &FloorResult)> = r
@@ -679,9 +774,10 @@ fn plots(r: &SwarmReport, dir: &Path) -> anyhow::Result<()> {
         .iter()
         .filter_map(|f| f.result.as_ref().map(|x| (f, x)))
         .collect();
+    // With several rounds each N has several rows: the plots show their median.
     let series = |name: &str, colour, dashed, points: Vec<(f64, f64)>| Series {
         name: name.into(),
-        points,
+        points: per_n_median(points),
         colour,
         dashed,
     };

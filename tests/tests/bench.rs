@@ -215,12 +215,81 @@ fn bench_swarm_reports_runtime_floor_and_in_process_and_cleans_up() {
     assert_nothing_left(&v);
 }
 
+/// `--rounds 2`: two runtime and two floor rows per N, in alternation, each round its own
+/// run directory, and the reported ratio is the median of the rounds' ratios.
+#[test]
+fn bench_swarm_rounds_alternate_and_report_the_median_ratio() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out_dir = tmp.path().join("rounds");
+    let out = swarm(
+        &[
+            "bench",
+            "swarm",
+            "--agents",
+            "2,3",
+            "--ticks",
+            "20",
+            "--rounds",
+            "2",
+            "--in-process-agents",
+            "5",
+            "--in-process-ticks",
+            "1",
+            "--json",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ],
+        LIMIT,
+    );
+    let v = json_of(&out);
+    let rounds_of = |rows: &serde_json::Value| -> Vec<(u64, u64)> {
+        rows.as_array()
+            .unwrap()
+            .iter()
+            .map(|r| (r["round"].as_u64().unwrap(), r["agents"].as_u64().unwrap()))
+            .collect()
+    };
+    let order = vec![(1, 2), (1, 3), (2, 2), (2, 3)];
+    assert_eq!(rounds_of(&v["runtime"]), order);
+    assert_eq!(rounds_of(&v["floor"]), order);
+    for (i, n) in [(0, 2), (1, 3)] {
+        let c = &v["comparison"][i];
+        assert_eq!(c["agents"], n);
+        let ratios: Vec<f64> = c["ratios"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| r.as_f64().unwrap())
+            .collect();
+        assert_eq!(ratios.len(), 2, "{c}");
+        // Each round's ratio is its own pair's medians.
+        for (k, ratio) in ratios.iter().enumerate() {
+            let rt = &v["runtime"][2 * k + i];
+            let fl = &v["floor"][2 * k + i];
+            let expect = rt["tick_ms_median"].as_f64().unwrap()
+                / (fl["result"]["tick_ns"]["median"].as_f64().unwrap() / 1e6);
+            assert!((ratio - expect).abs() < 1e-9, "{ratio} against {expect}");
+        }
+        let median = c["median_ratio"].as_f64().unwrap();
+        assert!(((ratios[0] + ratios[1]) / 2.0 - median).abs() < 1e-9, "{c}");
+    }
+    for f in ["runs/n2-r1", "runs/n2-r2", "runs/n3-r1", "runs/n3-r2"] {
+        assert!(
+            out_dir.join(f).join("trajectory.csv").exists(),
+            "{f} written"
+        );
+    }
+    assert!(out_dir.join("swarm.png").exists());
+    assert_nothing_left(&v);
+}
+
 #[test]
 fn bench_refuses_bad_arguments_with_one_line() {
     for args in [
         &["bench", "ipc", "--payload", "8"][..],
         &["bench", "ipc", "--secs", "0"][..],
         &["bench", "swarm", "--agents", "0"][..],
+        &["bench", "swarm", "--rounds", "0"][..],
     ] {
         let out = swarm(args, Duration::from_secs(60));
         let err = String::from_utf8_lossy(&out.stderr);
