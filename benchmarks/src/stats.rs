@@ -56,6 +56,17 @@ pub fn summarize(v: &mut [u64]) -> Summary {
     }
 }
 
+/// Median of `v` (mean of the middle two for an even count; `NaN` when empty).
+pub fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_unstable_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => (v[n / 2 - 1] + v[n / 2]) / 2.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

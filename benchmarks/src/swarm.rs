@@ -21,6 +21,7 @@ use swarmrt_world::Stage;
 use super::child::{ChildMsg, ChildSpec};
 use super::floor::{FloorResult, SAMPLE_TICK};
 use super::procs::{Children, Memory, memory, my_children, open_fds};
+use super::stats::median;
 use super::{
     BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_rate, machine, make_out_dir,
     progress, write_json,
@@ -742,17 +743,6 @@ fn compare(runtime: &[RuntimeRow], floor: &[FloorRow]) -> Vec<Comparison> {
             c
         })
         .collect()
-}
-
-/// The median of `v` (the mean of the middle two for an even count); NaN when empty.
-fn median(v: &[f64]) -> f64 {
-    let mut v = v.to_vec();
-    v.sort_by(f64::total_cmp);
-    match v.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => v[n / 2],
-        n => (v[n / 2 - 1] + v[n / 2]) / 2.0,
-    }
 }
 
 /// One point per N, the median of its rounds' values, in the order the counts first come.

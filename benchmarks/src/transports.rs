@@ -28,7 +28,7 @@ use swarmrt_protocol::services::RunServices;
 use swarmrt_protocol::{Command, Observation, ObservationHeader, PROTOCOL_VERSION};
 
 use super::child::{ChildMsg, Transport, say};
-use super::stats::{Summary, summarize};
+use super::stats::{Summary, median, summarize};
 use super::{PEER_TIMEOUT, Svc, bench_node, iox, service_name};
 use super::{WorldPorts, robot_ports, world_ports};
 
@@ -130,17 +130,6 @@ fn cpu_usage() -> (f64, i64) {
     }
     let secs = |tv: libc::timeval| tv.tv_sec as f64 + tv.tv_usec as f64 * 1e-6;
     (secs(ru.ru_utime) + secs(ru.ru_stime), ru.ru_nivcsw)
-}
-
-/// Median of `v` (mean of the middle two for an even count; `NaN` when empty).
-fn median(v: &[f64]) -> f64 {
-    let mut v = v.to_vec();
-    v.sort_unstable_by(f64::total_cmp);
-    match v.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => v[n / 2],
-        n => (v[n / 2 - 1] + v[n / 2]) / 2.0,
-    }
 }
 
 /// The measuring side, over any endpoint.
