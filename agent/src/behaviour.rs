@@ -4,7 +4,9 @@
 //!
 //! A behaviour owns everything about itself in its folder under `behaviours/`: its parameters
 //! (the `[behaviour]` keys, with their defaults and bounds), its radio message, its notes, its
-//! core and the metrics computed from its records. `registry.rs` lists it once.
+//! core and the metrics computed from its records. `registry.rs` lists it once. What a viewer
+//! draws of it (roles, headlines) is its [`crate::overlay::Overlay`] impl, in its folder's
+//! `overlay.rs`.
 
 use std::fmt::Debug;
 

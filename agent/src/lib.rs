@@ -4,7 +4,8 @@
 //!
 //! Where things are: [`behaviours`] (one folder per behaviour, listed once in [`registry`]),
 //! [`consensus`] (election, replicated log, quadrant leader choice), [`inbox`] (a decoded
-//! radio message), [`agent`] (one robot's tick).
+//! radio message), [`agent`] (one robot's tick), [`overlay`] (what a viewer draws of each
+//! behaviour: roles, headlines, consensus lanes).
 //!
 //! ```
 //! use swarmrt_agent::{Agent, registry};
@@ -36,6 +37,7 @@ pub mod behaviours;
 pub mod cli;
 pub mod consensus;
 pub mod inbox;
+pub mod overlay;
 pub mod registry;
 pub mod shell;
 

@@ -10,7 +10,7 @@
 
 use std::marker::PhantomData;
 
-use serde::Serialize;
+use serde::{Deserialize as _, Serialize};
 use serde_json::Value;
 use swarmrt_protocol::records::Records;
 use swarmrt_protocol::{Command, NoteJson, Observation, RecordedNote, Vocabulary};
@@ -18,11 +18,13 @@ use swarmrt_scenario::{BehaviourSection, Config, ConfigError, KeyError};
 
 use crate::behaviour::{Act, Behaviour, Params, Series};
 pub use crate::behaviours::{BEHAVIOURS, Note, RadioMsg};
-use crate::consensus::{ConsensusNote, Decision, Leadership};
+use crate::consensus::{ConsensusNote, Decision, Leadership, lane};
 use crate::inbox::Heard;
+use crate::overlay::{Headline, LaneChange, Overlay, RoleDef};
 
-/// Connects a behaviour to its variants of the envelopes (written by `behaviours!`).
-pub trait Enveloped: Behaviour {
+/// Connects a behaviour to its variants of the envelopes (written by `behaviours!`); every
+/// behaviour also has its viewer [`Overlay`].
+pub trait Enveloped: Behaviour + Overlay {
     /// `msg` inside the radio envelope.
     fn wrap_msg(msg: Self::Msg) -> RadioMsg;
     /// The behaviour's own message, if `msg` is one.
@@ -48,6 +50,23 @@ pub trait Plugin: Sync {
     fn metrics(&self, cfg: &Config, run: &Records) -> Result<Vec<(&'static str, Value)>, KeyError>;
     /// Its per-tick tables for a finished run.
     fn series(&self, cfg: &Config, run: &Records) -> Result<Vec<Series>, KeyError>;
+    /// The roles a viewer colours its robots by ([`crate::overlay`]); roles are indices.
+    fn roles(&self) -> &'static [RoleDef];
+    /// Robot `id`'s role at the start of the run (`None` also when `cfg`'s `[behaviour]`
+    /// does not parse, which a run's resolved `config.toml` always does).
+    fn initial_role(&self, cfg: &Config, id: u32) -> Option<u8>;
+    /// Robot `id`'s role after it reported `note`, the `note` field of an `events.jsonl`
+    /// line as recorded (a behaviour's note as itself, e.g. `{"veto":{...}}`); `None`:
+    /// unchanged, and for consensus notes and notes that are not this behaviour's.
+    fn role_after(&self, cfg: &Config, id: u32, note: &Value) -> Option<u8>;
+    /// `note` (as [`Plugin::role_after`] takes it) as a headline of the event timeline: the
+    /// behaviour's notable notes, and the consensus layer's (`{"consensus":{...}}`: elections,
+    /// quadrant leaders, [`crate::consensus::lane::headline`]).
+    fn headline(&self, note: &Value) -> Option<Headline>;
+    /// How `note` changes the reporter's consensus lane: the consensus layer's notes
+    /// ([`crate::consensus::lane::lane_change`]) and the behaviour's own leader choice
+    /// (grouping's `leader` note).
+    fn lane(&self, note: &Value) -> Option<LaneChange>;
 }
 
 /// A behaviour driven for one robot, its types erased: the agent hands it the tick's
@@ -140,6 +159,44 @@ impl<B: Enveloped> Plugin for Entry<B> {
         let p = parse::<B>(&cfg.behaviour.params)?;
         Ok(B::series(cfg, &p, run))
     }
+
+    fn roles(&self) -> &'static [RoleDef] {
+        B::ROLES
+    }
+
+    fn initial_role(&self, cfg: &Config, id: u32) -> Option<u8> {
+        let p = parse::<B>(&cfg.behaviour.params).ok()?;
+        B::initial_role(cfg, &p, id)
+    }
+
+    fn role_after(&self, cfg: &Config, id: u32, note: &Value) -> Option<u8> {
+        let note = behaviour_note::<B>(note)?;
+        let p = parse::<B>(&cfg.behaviour.params).ok()?;
+        B::role_after(&p, id, &note)
+    }
+
+    fn headline(&self, note: &Value) -> Option<Headline> {
+        match lane::from_json(note) {
+            Some(c) => lane::headline(&c),
+            None => B::headline(&behaviour_note::<B>(note)?),
+        }
+    }
+
+    fn lane(&self, note: &Value) -> Option<LaneChange> {
+        match lane::from_json(note) {
+            Some(c) => lane::lane_change(&c),
+            None => B::lane(&behaviour_note::<B>(note)?),
+        }
+    }
+}
+
+/// A recorded note as `B`'s own note; `None` for a consensus note (`{"consensus":{...}}`,
+/// which a lenient note type might otherwise accept) and for anything `B` never wrote.
+fn behaviour_note<B: Behaviour>(note: &Value) -> Option<B::Note> {
+    if note.get("consensus").is_some() {
+        return None;
+    }
+    B::Note::deserialize(note).ok()
 }
 
 struct Driver<B: Behaviour> {

@@ -34,6 +34,7 @@
 //! assert!(notes.as_slice().iter().any(|n| matches!(n, ConsensusNote::Apply { index: 2, .. })));
 //! ```
 
+pub mod lane;
 pub mod log;
 pub mod messages;
 pub mod notes;

@@ -39,6 +39,7 @@
 mod head;
 mod messages;
 mod metrics;
+mod overlay;
 mod params;
 mod rods;
 

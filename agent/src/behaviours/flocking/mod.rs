@@ -13,6 +13,7 @@ mod desired;
 mod mates;
 mod messages;
 mod metrics;
+mod overlay;
 mod params;
 mod wheels;
 

@@ -16,6 +16,7 @@ pub mod direction;
 pub mod messages;
 pub mod metrics;
 pub mod observers;
+mod overlay;
 mod params;
 
 use std::collections::BTreeMap;

@@ -4,6 +4,7 @@
 //! fight for one point), steers proportionally toward it, and when the lidar sees something
 //! closer than `avoid_distance` ahead, turns toward the more open side and slows down.
 
+mod overlay;
 mod params;
 
 use std::f64::consts::PI;

@@ -27,6 +27,7 @@ mod explore;
 mod force;
 mod messages;
 pub mod metrics;
+mod overlay;
 mod params;
 
 pub use messages::{GroupMsg, GroupNote, MAX_GROUP};

@@ -21,6 +21,7 @@
 //!   committed can never be flown after a new leader took over.
 
 mod messages;
+mod overlay;
 mod params;
 pub mod scene;
 pub mod metrics;
