@@ -150,7 +150,8 @@ impl Lockstep {
 }
 
 /// Runs the scenario to the end (or until `stop` says so, asked every tick), recording
-/// `trajectory.csv` and `events.jsonl` into `dir`; `progress` gets each completed tick.
+/// `trajectory.csv` and `events.jsonl` (and `radio.csv` with `scenario.record_radio`) into
+/// `dir` as the world process does; `progress` gets each completed tick.
 /// Returns the world's metrics and whether it was stopped early.
 pub fn run_recorded(
     cfg: &Config,
@@ -160,7 +161,8 @@ pub fn run_recorded(
 ) -> std::io::Result<(swarmrt_world::WorldMetrics, bool)> {
     let mut run = Lockstep::new(cfg)
         .map_err(|e| std::io::Error::other(format!("key `{}`: {}", e.key, e.message)))?;
-    let mut recorder = swarmrt_world::records::Recorder::create(dir, cfg.robots.aerial.is_some())?;
+    let mut recorder = swarmrt_world::records::Recorder::for_run(dir, cfg)?;
+    run.world.set_radio_recording(cfg.scenario.record_radio);
     let events = run.drain_events();
     recorder.record(run.world.tick(), run.world.robots(), &events)?;
     let mut stopped = false;
@@ -171,7 +173,8 @@ pub fn run_recorded(
         }
         run.step();
         let events = run.drain_events();
-        recorder.record(run.world.tick(), run.world.robots(), &events)?;
+        let radio = run.world.take_radio_rows();
+        recorder.record_tick(run.world.tick(), run.world.robots(), &events, &radio)?;
         progress(run.world.tick());
     }
     Ok((run.world.metrics(), stopped))

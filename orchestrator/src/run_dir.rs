@@ -278,7 +278,8 @@ pub fn write_plots(dir: &Path, cfg: &Config) -> anyhow::Result<()> {
 }
 
 /// After the world process died, cuts `trajectory.csv` back to its last complete tick (all
-/// `robots` rows) and `events.jsonl` to whole lines of ticks up to it. The world writes each
+/// `robots` rows), and `events.jsonl` and `radio.csv` (when the run records it) to whole
+/// lines of ticks up to it. The world writes each
 /// tick with one `write_all`, but the kernel may cut a large write short when a fatal signal
 /// arrives, so the records are made whole here rather than trusted. Returns the last tick.
 pub fn trim_torn_records(dir: &Path, robots: usize) -> anyhow::Result<Option<u64>> {
@@ -318,6 +319,32 @@ pub fn trim_torn_records(dir: &Path, robots: usize) -> anyhow::Result<Option<u64
     }
     if kept < text.len() {
         truncate(&path, kept as u64)?;
+    }
+
+    // `radio.csv` (opt-in): the header, then rows whose first column is their tick,
+    // non-decreasing; keep whole lines up to the last whole trajectory tick.
+    let path = dir.join("radio.csv");
+    if let Ok(text) = std::fs::read(&path) {
+        let mut kept = 0;
+        for (i, line) in text.split_inclusive(|&b| b == b'\n').enumerate() {
+            if line.last() != Some(&b'\n') {
+                break;
+            }
+            if i > 0 {
+                let tick = std::str::from_utf8(line)
+                    .ok()
+                    .and_then(|l| l.split(',').next())
+                    .and_then(|t| t.parse::<u64>().ok());
+                match (tick, last) {
+                    (Some(t), Some(l)) if t <= l => {}
+                    _ => break,
+                }
+            }
+            kept += line.len();
+        }
+        if kept < text.len() {
+            truncate(&path, kept as u64)?;
+        }
     }
     Ok(last)
 }
@@ -402,7 +429,16 @@ mod tests {
              {\"event\":\"reached\",\"tick\":2,\"robot\":1}\n{\"event\":\"rea",
         )
         .unwrap();
+        let radio = "tick,sent_tick,from,to,bytes,outcome\n0,0,0,1,4,loss\n\
+                     1,0,1,0,4,delivered\n1,1,0,,4,capacity\n2,1,0,1,4,delivered\n2,2,1,0,4,lo";
+        std::fs::write(dir.path().join("radio.csv"), radio).unwrap();
         assert_eq!(trim_torn_records(dir.path(), 2).unwrap(), Some(1));
+        let kept = std::fs::read_to_string(dir.path().join("radio.csv")).unwrap();
+        assert_eq!(
+            kept,
+            "tick,sent_tick,from,to,bytes,outcome\n0,0,0,1,4,loss\n\
+             1,0,1,0,4,delivered\n1,1,0,,4,capacity\n"
+        );
         let csv = std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap();
         assert!(csv.ends_with("1,1,2,2,0,0,0,1,active\n"), "{csv}");
         assert_eq!(csv.lines().count(), 5);
@@ -414,5 +450,19 @@ mod tests {
             std::fs::read_to_string(dir.path().join("trajectory.csv")).unwrap(),
             csv
         );
+        assert_eq!(
+            std::fs::read_to_string(dir.path().join("radio.csv")).unwrap(),
+            kept
+        );
+        // A torn header alone is cut to nothing; a run without radio.csv has none made.
+        std::fs::write(dir.path().join("radio.csv"), "tick,sent_ti").unwrap();
+        assert_eq!(trim_torn_records(dir.path(), 2).unwrap(), Some(1));
+        assert_eq!(
+            std::fs::read_to_string(dir.path().join("radio.csv")).unwrap(),
+            ""
+        );
+        std::fs::remove_file(dir.path().join("radio.csv")).unwrap();
+        assert_eq!(trim_torn_records(dir.path(), 2).unwrap(), Some(1));
+        assert!(!dir.path().join("radio.csv").exists());
     }
 }

@@ -1,6 +1,7 @@
-//! The run records' schema: what the world writes to `trajectory.csv` and `events.jsonl` and
-//! every reader (metrics, the consensus checker, plots) reads back. Columns are found by name,
-//! so a reader never depends on their order.
+//! The run records' schema: what the world writes to `trajectory.csv` and `events.jsonl` (and,
+//! with `scenario.record_radio`, `radio.csv`) and every reader (metrics, the consensus checker,
+//! plots, the viewer) reads back. Columns are found by name, so a reader never depends on their
+//! order.
 
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -228,5 +229,225 @@ impl Records {
     /// The notes robots reported (`"note"` events' `note` field), in record order.
     pub fn notes(&self) -> impl Iterator<Item = &Value> {
         self.events_of("note").map(|e| &e["note"])
+    }
+}
+
+/// Header line of `radio.csv` (written only with `scenario.record_radio = true`).
+///
+/// One line per radio copy whose fate is decided, in the order the medium decided them:
+/// `tick` when it happened (the send tick for drops at routing, the delivery tick for
+/// deliveries and drops at delivery), `sent_tick`, `from` (the sender), `to` (the receiver; for
+/// a broadcast copy the robot that was to hear it; empty for a broadcast frame refused for
+/// capacity, which has no receiver), `bytes` (payload length) and `outcome`
+/// ([`RadioOutcome::as_str`]). Copies still in flight at the end of a run have no line, so the
+/// lines number `sent - in_flight` of `metrics.json`'s `radio`, and each outcome's lines equal
+/// its counter (`delivered`, `dropped_<outcome>`).
+pub const RADIO_HEADER: &str = "tick,sent_tick,from,to,bytes,outcome\n";
+
+/// What became of one radio copy: delivered, or dropped with a reason (the `dropped_*`
+/// counters of `metrics.json`'s `radio`, without the prefix).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum RadioOutcome {
+    /// Put into the receiver's inbox.
+    Delivered,
+    /// Lost by the loss model.
+    Loss,
+    /// A unicast whose receiver was out of range, unknown or the sender itself.
+    OutOfRange,
+    /// Beyond the sender's per-tick capacity.
+    Capacity,
+    /// Blocked by an obstacle between sender and receiver.
+    LineOfSight,
+    /// The receiver was down or dead at send or delivery time.
+    ReceiverDown,
+    /// Due when the receiver's inbox was already full.
+    InboxFull,
+    /// Sender and receiver were apart in a scheduled partition or blackout.
+    Partition,
+}
+
+impl RadioOutcome {
+    /// Every outcome, in the order of the `radio` counters.
+    pub const ALL: [RadioOutcome; 8] = [
+        RadioOutcome::Delivered,
+        RadioOutcome::Loss,
+        RadioOutcome::OutOfRange,
+        RadioOutcome::Capacity,
+        RadioOutcome::LineOfSight,
+        RadioOutcome::ReceiverDown,
+        RadioOutcome::InboxFull,
+        RadioOutcome::Partition,
+    ];
+
+    /// The name in `radio.csv`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            RadioOutcome::Delivered => "delivered",
+            RadioOutcome::Loss => "loss",
+            RadioOutcome::OutOfRange => "out_of_range",
+            RadioOutcome::Capacity => "capacity",
+            RadioOutcome::LineOfSight => "line_of_sight",
+            RadioOutcome::ReceiverDown => "receiver_down",
+            RadioOutcome::InboxFull => "inbox_full",
+            RadioOutcome::Partition => "partition",
+        }
+    }
+
+    /// The outcome named `name` in `radio.csv`, if it is one.
+    pub fn from_name(name: &str) -> Option<RadioOutcome> {
+        RadioOutcome::ALL.into_iter().find(|o| o.as_str() == name)
+    }
+
+    /// The key of its counter in `metrics.json`'s `radio` (`delivered`, `dropped_loss`, ...).
+    pub fn counter(self) -> &'static str {
+        match self {
+            RadioOutcome::Delivered => "delivered",
+            RadioOutcome::Loss => "dropped_loss",
+            RadioOutcome::OutOfRange => "dropped_out_of_range",
+            RadioOutcome::Capacity => "dropped_capacity",
+            RadioOutcome::LineOfSight => "dropped_line_of_sight",
+            RadioOutcome::ReceiverDown => "dropped_receiver_down",
+            RadioOutcome::InboxFull => "dropped_inbox_full",
+            RadioOutcome::Partition => "dropped_partition",
+        }
+    }
+}
+
+/// One radio copy's fate (a `radio.csv` line, see [`RADIO_HEADER`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RadioRow {
+    /// Tick at which the outcome happened.
+    pub tick: u64,
+    /// Tick at which the frame was sent.
+    pub sent_tick: u64,
+    /// The sender.
+    pub from: u32,
+    /// The receiver; `None` for a broadcast frame refused for capacity (it had none).
+    pub to: Option<u32>,
+    /// Payload length in bytes.
+    pub bytes: u16,
+    /// What became of it.
+    pub outcome: RadioOutcome,
+}
+
+impl RadioRow {
+    /// Appends this row as one `radio.csv` line (with its newline) to `out`.
+    pub fn write_line(&self, out: &mut String) {
+        use std::fmt::Write as _;
+        let _ = write!(out, "{},{},{},", self.tick, self.sent_tick, self.from);
+        if let Some(to) = self.to {
+            let _ = write!(out, "{to}");
+        }
+        let _ = writeln!(out, ",{},{}", self.bytes, self.outcome.as_str());
+    }
+}
+
+/// Where each field of [`RadioRow`] is in a `radio.csv` line, found from its header.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RadioColumns {
+    tick: usize,
+    sent_tick: usize,
+    from: usize,
+    to: usize,
+    bytes: usize,
+    outcome: usize,
+    count: usize,
+}
+
+impl RadioColumns {
+    /// The columns of a header line; `Err` names a missing column.
+    pub fn from_header(header: &str) -> Result<RadioColumns, String> {
+        let names: Vec<&str> = header.trim_end().split(',').collect();
+        let at = |name: &str| {
+            names
+                .iter()
+                .position(|n| *n == name)
+                .ok_or_else(|| format!("radio.csv has no `{name}` column"))
+        };
+        Ok(RadioColumns {
+            tick: at("tick")?,
+            sent_tick: at("sent_tick")?,
+            from: at("from")?,
+            to: at("to")?,
+            bytes: at("bytes")?,
+            outcome: at("outcome")?,
+            count: names.len(),
+        })
+    }
+
+    /// One data line (without its newline), `None` when it is not a whole row.
+    pub fn parse(&self, line: &str) -> Option<RadioRow> {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != self.count {
+            return None;
+        }
+        Some(RadioRow {
+            tick: f[self.tick].parse().ok()?,
+            sent_tick: f[self.sent_tick].parse().ok()?,
+            from: f[self.from].parse().ok()?,
+            to: match f[self.to] {
+                "" => None,
+                to => Some(to.parse().ok()?),
+            },
+            bytes: f[self.bytes].parse().ok()?,
+            outcome: RadioOutcome::from_name(f[self.outcome])?,
+        })
+    }
+}
+
+/// Parses the text of `radio.csv`: every whole row, in file order. Lines that are not whole
+/// rows are skipped, and so is a last line without its newline (a crashed run's may be torn
+/// anywhere, even right after a valid outcome name).
+pub fn parse_radio(text: &str) -> Result<Vec<RadioRow>, String> {
+    let mut lines = text.split_inclusive('\n');
+    let cols = RadioColumns::from_header(lines.next().unwrap_or(""))?;
+    Ok(lines
+        .filter_map(|l| l.strip_suffix('\n'))
+        .filter_map(|l| cols.parse(l.strip_suffix('\r').unwrap_or(l)))
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn radio_rows_round_trip_and_torn_lines_are_skipped() {
+        let rows = [
+            RadioRow {
+                tick: 5,
+                sent_tick: 3,
+                from: 1,
+                to: Some(2),
+                bytes: 17,
+                outcome: RadioOutcome::Delivered,
+            },
+            RadioRow {
+                tick: 5,
+                sent_tick: 5,
+                from: 4,
+                to: None,
+                bytes: 9,
+                outcome: RadioOutcome::Capacity,
+            },
+        ];
+        let mut text = RADIO_HEADER.to_string();
+        for r in &rows {
+            r.write_line(&mut text);
+        }
+        assert_eq!(
+            text,
+            "tick,sent_tick,from,to,bytes,outcome\n5,3,1,2,17,delivered\n5,5,4,,9,capacity\n"
+        );
+        assert_eq!(parse_radio(&text).unwrap(), rows);
+        // A torn last line is skipped, even one cut right after a valid outcome name.
+        assert_eq!(parse_radio(&format!("{text}6,6,0,1,3,loss")).unwrap(), rows);
+        assert_eq!(parse_radio(&format!("{text}6,6,0,1")).unwrap(), rows);
+        assert_eq!(parse_radio(&format!("{text}6,6,0,1,3,lo\n")).unwrap(), rows);
+        assert!(parse_radio("tick,from\n").is_err());
+        for o in RadioOutcome::ALL {
+            assert_eq!(RadioOutcome::from_name(o.as_str()), Some(o));
+            assert!(o.counter().ends_with(o.as_str()));
+        }
     }
 }

@@ -88,6 +88,12 @@ pub struct Scenario {
     /// stopped process) is marked dead and killed, so one stuck robot cannot hang the run.
     #[serde(default = "default_unresponsive_ms")]
     pub unresponsive_ms: u64,
+    /// Write `radio.csv`: one line per radio copy whose fate is decided (delivered, or dropped
+    /// with its reason). Off by default; left out of the resolved config while off, so a run
+    /// that does not ask for it writes the same `config.toml` as before the key existed. It
+    /// changes no other record.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub record_radio: bool,
 }
 
 /// `[map]`: the arena. Its bounds are walls.

@@ -43,6 +43,24 @@ fn overrides_reach_nested_keys_and_round_trip() {
 }
 
 #[test]
+fn record_radio_is_off_by_default_set_by_override_and_resolved_only_when_on() {
+    let off = load(MINIMAL, &[]).unwrap();
+    assert!(!off.scenario.record_radio);
+    // Off, the resolved config does not mention it: older run directories stay the same bytes.
+    assert!(!off.to_toml().contains("record_radio"), "{}", off.to_toml());
+    let on = load(MINIMAL, &["scenario.record_radio=true"]).unwrap();
+    assert!(on.scenario.record_radio);
+    assert!(
+        on.to_toml().contains("record_radio = true"),
+        "{}",
+        on.to_toml()
+    );
+    assert_eq!(load(&on.to_toml(), &[]).unwrap(), on);
+    let e = load(MINIMAL, &["scenario.record_radio=yes"]).unwrap_err();
+    assert_eq!(e.key, "scenario.record_radio", "{e}");
+}
+
+#[test]
 fn unknown_key_names_file_and_key() {
     let e = load(MINIMAL, &["radio.los=0.3"]).unwrap_err();
     assert_eq!(e.file, "t.toml");

@@ -61,11 +61,21 @@
 //! FIFO without jitter (arrival order is then due order), a min-heap with it; copies that can
 //! only find a full inbox wait as a count. Inboxes hold slots of one frame store, so every
 //! copy of a broadcast is the same 152 bytes in memory once.
+//!
+//! # Recording
+//!
+//! With [`RadioMedium::set_recording`] on, every copy whose fate is decided also leaves a
+//! [`RadioRow`] (the `radio.csv` line), in the order the medium decides them, for the shell to
+//! take with [`RadioMedium::take_log`]. Copies then never wait as a count (each needs its own
+//! sender and length at delivery); they meet the same fate in the same order, so counters,
+//! inboxes and draws are those of a run without recording. Off (the default), the only cost is
+//! one branch per decided copy.
 
 use std::cmp::Ordering;
 use std::collections::{BTreeSet, BinaryHeap, VecDeque};
 
 use rand::Rng as _;
+use swarmrt_protocol::records::{RadioOutcome, RadioRow};
 use swarmrt_protocol::{BROADCAST, Frame, MAX_INBOX};
 use swarmrt_scenario::{LossModel, RadioConfig};
 
@@ -112,6 +122,46 @@ enum Reason {
     ReceiverDown,
     InboxFull,
     Partition,
+}
+
+impl Reason {
+    fn outcome(self) -> RadioOutcome {
+        match self {
+            Reason::Loss => RadioOutcome::Loss,
+            Reason::OutOfRange => RadioOutcome::OutOfRange,
+            Reason::Capacity => RadioOutcome::Capacity,
+            Reason::LineOfSight => RadioOutcome::LineOfSight,
+            Reason::ReceiverDown => RadioOutcome::ReceiverDown,
+            Reason::InboxFull => RadioOutcome::InboxFull,
+            Reason::Partition => RadioOutcome::Partition,
+        }
+    }
+}
+
+/// The row of one copy of `frame` (its `src` and `sent_tick` already the world's).
+fn row(tick: u64, frame: &Frame, to: Option<u32>, outcome: RadioOutcome) -> RadioRow {
+    RadioRow {
+        tick,
+        sent_tick: frame.sent_tick,
+        from: frame.src,
+        to,
+        bytes: frame.len,
+        outcome,
+    }
+}
+
+/// Appends the row of one copy of `frame` to `log` when recording.
+#[inline]
+fn note(
+    log: &mut Option<Vec<RadioRow>>,
+    tick: u64,
+    frame: &Frame,
+    to: Option<u32>,
+    outcome: RadioOutcome,
+) {
+    if let Some(log) = log {
+        log.push(row(tick, frame, to, outcome));
+    }
 }
 
 impl RadioStats {
@@ -329,6 +379,8 @@ pub struct RadioMedium {
     stats: RadioStats,
     /// Radio group per robot while a partition or blackout is on; different groups are apart.
     groups: Option<Vec<u64>>,
+    /// The rows of decided copies since the last [`Self::take_log`], while recording.
+    log: Option<Vec<RadioRow>>,
 }
 
 impl RadioMedium {
@@ -351,7 +403,26 @@ impl RadioMedium {
             scratch: Vec::new(),
             marks: Vec::new(),
             stats: RadioStats::default(),
+            log: None,
         }
+    }
+
+    /// Switches recording on or off (off when built): while on, every decided copy leaves a
+    /// [`RadioRow`] for [`Self::take_log`]. Switch it on before the first send for a row per
+    /// copy (copies already waiting as a count get none). Switching off discards rows not yet
+    /// taken.
+    pub fn set_recording(&mut self, on: bool) {
+        match (on, self.log.is_some()) {
+            (true, false) => self.log = Some(Vec::new()),
+            (false, true) => self.log = None,
+            _ => {}
+        }
+    }
+
+    /// The rows of the copies decided since the last call, in the order they were decided
+    /// (empty when not recording).
+    pub fn take_log(&mut self) -> Vec<RadioRow> {
+        self.log.as_mut().map(std::mem::take).unwrap_or_default()
     }
 
     /// Routes the frames robots sent at `tick`, so that they arrive at a later [`Self::deliver`].
@@ -401,6 +472,15 @@ impl RadioMedium {
                 if k >= capacity {
                     self.stats.sent += 1;
                     self.stats.count_drop(Reason::Capacity);
+                    if self.log.is_some() {
+                        let copy = Frame {
+                            src: src as u32,
+                            sent_tick: tick,
+                            ..*frame
+                        };
+                        let to = (frame.dst != BROADCAST).then_some(frame.dst);
+                        note(&mut self.log, tick, &copy, to, RadioOutcome::Capacity);
+                    }
                     continue;
                 }
                 let mut copy = *frame;
@@ -429,11 +509,15 @@ impl RadioMedium {
                     let dst = copy.dst as usize;
                     if dst < n && !can_talk[dst] {
                         self.stats.count_drop(Reason::ReceiverDown);
+                        let why = RadioOutcome::ReceiverDown;
+                        note(&mut self.log, tick, &copy, Some(copy.dst), why);
                     } else if dst >= n
                         || dst == src
                         || !in_range(positions[src], positions[dst], range)
                     {
                         self.stats.count_drop(Reason::OutOfRange);
+                        let why = RadioOutcome::OutOfRange;
+                        note(&mut self.log, tick, &copy, Some(copy.dst), why);
                     } else {
                         self.route(tick, src, dst, &copy, &mut slot, blocked);
                     }
@@ -453,20 +537,22 @@ impl RadioMedium {
         slot: &mut Option<u32>,
         blocked: &mut dyn FnMut(usize, usize) -> bool,
     ) {
-        if self
+        let dropped = if self
             .groups
             .as_ref()
             .is_some_and(|g| g.get(src) != g.get(dst))
         {
-            self.stats.count_drop(Reason::Partition);
-            return;
-        }
-        if self.cfg.line_of_sight && blocked(src, dst) {
-            self.stats.count_drop(Reason::LineOfSight);
-            return;
-        }
-        if self.lose(src as u32, dst as u32) {
-            self.stats.count_drop(Reason::Loss);
+            Some(Reason::Partition)
+        } else if self.cfg.line_of_sight && blocked(src, dst) {
+            Some(Reason::LineOfSight)
+        } else if self.lose(src as u32, dst as u32) {
+            Some(Reason::Loss)
+        } else {
+            None
+        };
+        if let Some(why) = dropped {
+            self.stats.count_drop(why);
+            note(&mut self.log, tick, copy, Some(dst as u32), why.outcome());
             return;
         }
         let jitter = if self.cfg.jitter_ticks > 0 {
@@ -479,7 +565,8 @@ impl RadioMedium {
             .saturating_add(self.cfg.delay_ticks as u64)
             .saturating_add(jitter);
         self.stats.in_flight += 1;
-        if self.queues[dst].absorb(due) {
+        // While recording, each copy keeps its own entry: its row needs its sender and length.
+        if self.log.is_none() && self.queues[dst].absorb(due) {
             return;
         }
         let slot = *slot.get_or_insert_with(|| match self.free.pop() {
@@ -553,13 +640,29 @@ impl RadioMedium {
     pub fn deliver_due(&mut self, tick: u64, can_talk: &[bool]) {
         let n = self.robot_count;
         assert_eq!(can_talk.len(), n, "radio: one can_talk per robot");
-        let (frames, free, stats) = (&mut self.frames, &mut self.free, &mut self.stats);
+        let (frames, free, stats, log) = (
+            &mut self.frames,
+            &mut self.free,
+            &mut self.stats,
+            &mut self.log,
+        );
         for (r, (inbox, queue)) in self.inboxes.iter_mut().zip(&mut self.queues).enumerate() {
             for slot in inbox.drain(..) {
                 release(frames, free, slot);
             }
             while let Some(p) = queue.pop_due(tick) {
                 stats.in_flight -= 1;
+                if let Some(log) = log.as_mut() {
+                    let outcome = if !can_talk[r] {
+                        RadioOutcome::ReceiverDown
+                    } else if inbox.len() < MAX_INBOX {
+                        RadioOutcome::Delivered
+                    } else {
+                        RadioOutcome::InboxFull
+                    };
+                    let frame = &frames[p.slot as usize].0;
+                    log.push(row(tick, frame, Some(r as u32), outcome));
+                }
                 if !can_talk[r] {
                     release(frames, free, p.slot);
                     stats.count_drop(Reason::ReceiverDown);
@@ -571,6 +674,8 @@ impl RadioMedium {
                     stats.count_drop(Reason::InboxFull);
                 }
                 if p.surplus > 0 {
+                    // Absorbed before recording was switched on (if ever): such copies have
+                    // no rows; every copy routed while recording has its own entry.
                     stats.in_flight -= p.surplus as u64;
                     let why = if can_talk[r] {
                         debug_assert_eq!(inbox.len(), MAX_INBOX);

@@ -1,15 +1,22 @@
-//! The run records the world owns: `trajectory.csv` and `events.jsonl` (DESIGN section 7).
+//! The run records the world owns: `trajectory.csv` and `events.jsonl` (DESIGN section 7), and
+//! with `scenario.record_radio` the opt-in `radio.csv` (one line per radio copy whose fate is
+//! decided, [`swarmrt_protocol::records::RADIO_HEADER`]).
 //!
-//! Each tick's lines are formatted into one buffer and written with a single `write_all`, so
-//! a process killed mid-run leaves whole lines up to its last tick, never a torn one.
+//! Each tick's lines are formatted into one buffer per file and written with a single
+//! `write_all`, events and radio lines before the trajectory rows, so a process killed mid-run
+//! leaves whole lines up to its last tick, never a torn one (the orchestrator trims what the
+//! kernel cut short).
 
 use std::fs::File;
 use std::io::Write;
 use std::path::Path;
 
+use swarmrt_protocol::records::RadioRow;
+use swarmrt_scenario::Config;
+
 use crate::world::{Event, Robot};
 
-pub use swarmrt_protocol::records::{TRAJECTORY_HEADER, TRAJECTORY_HEADER_AERIAL};
+pub use swarmrt_protocol::records::{RADIO_HEADER, TRAJECTORY_HEADER, TRAJECTORY_HEADER_AERIAL};
 
 /// The header for robots that are `aerial` or not.
 pub fn trajectory_header(aerial: bool) -> &'static str {
@@ -67,10 +74,19 @@ pub fn event_lines(out: &mut String, events: &[Event]) {
     }
 }
 
-/// Writes `trajectory.csv` and `events.jsonl` into a run directory, tick by tick.
+/// Appends one `radio.csv` line per row to `out`.
+pub fn radio_lines(out: &mut String, rows: &[RadioRow]) {
+    for r in rows {
+        r.write_line(out);
+    }
+}
+
+/// Writes `trajectory.csv` and `events.jsonl` (and `radio.csv` when asked) into a run
+/// directory, tick by tick.
 pub struct Recorder {
     trajectory: File,
     events: File,
+    radio: Option<File>,
     buf: String,
     aerial: bool,
 }
@@ -85,9 +101,35 @@ impl Recorder {
         Ok(Recorder {
             trajectory,
             events,
+            radio: None,
             buf: String::new(),
             aerial,
         })
+    }
+
+    /// The records `cfg` asks for: [`Recorder::create`] (aerial columns for aerial robots),
+    /// plus `radio.csv` with its header when `scenario.record_radio` is set.
+    pub fn for_run(dir: &Path, cfg: &Config) -> std::io::Result<Recorder> {
+        let mut recorder = Recorder::create(dir, cfg.robots.aerial.is_some())?;
+        if cfg.scenario.record_radio {
+            let mut radio = File::create(dir.join("radio.csv"))?;
+            radio.write_all(RADIO_HEADER.as_bytes())?;
+            recorder.radio = Some(radio);
+        }
+        Ok(recorder)
+    }
+
+    /// Appends `radio.csv` lines (nothing when the recorder writes no `radio.csv`).
+    pub fn record_radio(&mut self, rows: &[RadioRow]) -> std::io::Result<()> {
+        let Some(file) = self.radio.as_mut() else {
+            return Ok(());
+        };
+        if rows.is_empty() {
+            return Ok(());
+        }
+        self.buf.clear();
+        radio_lines(&mut self.buf, rows);
+        file.write_all(self.buf.as_bytes())
     }
 
     /// Appends events without a trajectory row (e.g. a death noticed after the last tick).
@@ -102,7 +144,20 @@ impl Recorder {
 
     /// Records the robots' state at `tick` and the events that led to it.
     pub fn record(&mut self, tick: u64, robots: &[Robot], events: &[Event]) -> std::io::Result<()> {
+        self.record_tick(tick, robots, events, &[])
+    }
+
+    /// [`Recorder::record`] with the radio rows of the step that led to `tick`, written after
+    /// the events and before the trajectory rows.
+    pub fn record_tick(
+        &mut self,
+        tick: u64,
+        robots: &[Robot],
+        events: &[Event],
+        radio: &[RadioRow],
+    ) -> std::io::Result<()> {
         self.record_events(events)?;
+        self.record_radio(radio)?;
         self.buf.clear();
         trajectory_rows(&mut self.buf, tick, robots, self.aerial);
         self.trajectory.write_all(self.buf.as_bytes())
@@ -111,7 +166,7 @@ impl Recorder {
 
 /// What the [`RecordWriter`] thread is asked to write.
 enum Job {
-    Tick(u64, Vec<Robot>, Vec<Event>),
+    Tick(u64, Vec<Robot>, Vec<Event>, Vec<RadioRow>),
     Events(Vec<Event>),
 }
 
@@ -131,15 +186,23 @@ pub struct RecordWriter {
 impl RecordWriter {
     /// Creates the files as [`Recorder::create`] does and starts the writer thread.
     pub fn create(dir: &Path, aerial: bool) -> std::io::Result<RecordWriter> {
-        let mut recorder = Recorder::create(dir, aerial)?;
+        RecordWriter::start(Recorder::create(dir, aerial)?)
+    }
+
+    /// Creates the files as [`Recorder::for_run`] does and starts the writer thread.
+    pub fn for_run(dir: &Path, cfg: &Config) -> std::io::Result<RecordWriter> {
+        RecordWriter::start(Recorder::for_run(dir, cfg)?)
+    }
+
+    fn start(mut recorder: Recorder) -> std::io::Result<RecordWriter> {
         let (tx, rx) = std::sync::mpsc::sync_channel::<Job>(WRITER_BACKLOG);
         let thread = std::thread::Builder::new()
             .name("records".into())
             .spawn(move || {
                 for job in rx {
                     match job {
-                        Job::Tick(tick, robots, events) => {
-                            recorder.record(tick, &robots, &events)?
+                        Job::Tick(tick, robots, events, radio) => {
+                            recorder.record_tick(tick, &robots, &events, &radio)?
                         }
                         Job::Events(events) => recorder.record_events(&events)?,
                     }
@@ -160,7 +223,18 @@ impl RecordWriter {
         robots: &[Robot],
         events: Vec<Event>,
     ) -> std::io::Result<()> {
-        self.send(Job::Tick(tick, robots.to_vec(), events))
+        self.record_tick(tick, robots, events, Vec::new())
+    }
+
+    /// [`Recorder::record_tick`], written by the thread.
+    pub fn record_tick(
+        &mut self,
+        tick: u64,
+        robots: &[Robot],
+        events: Vec<Event>,
+        radio: Vec<RadioRow>,
+    ) -> std::io::Result<()> {
+        self.send(Job::Tick(tick, robots.to_vec(), events, radio))
     }
 
     /// [`Recorder::record_events`], written by the thread.

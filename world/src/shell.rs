@@ -364,7 +364,8 @@ pub fn run(
     let n = cfg.robots.count as usize;
     let realtime = mode == Mode::Realtime;
     let mut world = World::new(cfg, vocabulary).map_err(|e| format!("{}: {}", e.key, e.message))?;
-    let mut recorder = RecordWriter::create(out_dir, cfg.robots.aerial.is_some())?;
+    let mut recorder = RecordWriter::for_run(out_dir, cfg)?;
+    world.set_radio_recording(cfg.scenario.record_radio);
 
     match ipc::raise_fd_limit() {
         Ok(limit) if limit < 8 * n as u64 + 64 => {
@@ -665,8 +666,9 @@ pub fn run(
         let t3 = Instant::now();
         world.step(&commands);
         let events = world.drain_events();
+        let radio = world.take_radio_rows();
         let t4 = Instant::now();
-        recorder.record(world.tick(), world.robots(), events)?;
+        recorder.record_tick(world.tick(), world.robots(), events, radio)?;
         let t5 = Instant::now();
         let ns = |a: Instant, b: Instant| (b - a).as_nanos() as u64;
         timer.add(TickPhases {

@@ -572,6 +572,17 @@ type Transcript = Vec<(u64, usize, Vec<Frame>)>;
 /// A random scenario (robots moving, going down and up, random outboxes and config),
 /// checking the accounting after every call and the shape of every delivered frame.
 fn random_run(scenario: u64, radio_seed: u64) -> (Transcript, RadioStats) {
+    let (transcript, stats, rows) = random_run_recorded(scenario, radio_seed, false);
+    assert!(rows.is_empty(), "no rows without recording");
+    (transcript, stats)
+}
+
+/// [`random_run`], recording when `record`: also the rows taken after every call.
+fn random_run_recorded(
+    scenario: u64,
+    radio_seed: u64,
+    record: bool,
+) -> (Transcript, RadioStats, Vec<RadioRow>) {
     let mut r = rng::stream(scenario, "radio-test-scenario", 0);
     let n = r.random_range(2..=40usize);
     let broadcast_share: f64 = r.random_range(0.2..0.95);
@@ -594,6 +605,8 @@ fn random_run(scenario: u64, radio_seed: u64) -> (Transcript, RadioStats) {
     };
     let max_lag = 1 + cfg.delay_ticks as u64 + cfg.jitter_ticks as u64;
     let mut m = RadioMedium::new(cfg, radio_seed, n);
+    m.set_recording(record);
+    let mut rows = Vec::new();
     let side: f64 = r.random_range(4.0..30.0);
     let mut pos: Vec<(f64, f64)> = (0..n)
         .map(|_| (r.random_range(0.0..side), r.random_range(0.0..side)))
@@ -606,6 +619,7 @@ fn random_run(scenario: u64, radio_seed: u64) -> (Transcript, RadioStats) {
         let mut inboxes = vec![Vec::new(); n];
         m.deliver(t, &talk, &mut inboxes);
         check(&m.stats());
+        rows.extend(m.take_log());
         for (rx, inbox) in inboxes.into_iter().enumerate() {
             assert!(inbox.len() <= MAX_INBOX);
             for f in &inbox {
@@ -621,8 +635,15 @@ fn random_run(scenario: u64, radio_seed: u64) -> (Transcript, RadioStats) {
         if t >= ticks {
             // Drain: everyone talks, nobody sends.
             talk.iter_mut().for_each(|c| *c = true);
+            m.set_groups(None);
             continue;
         }
+        // A partition of odd and even ids for a while (no draw: the scenario stays the same).
+        m.set_groups(
+            (20..30)
+                .contains(&t)
+                .then(|| (0..n as u64).map(|i| i % 2).collect()),
+        );
         let out: Vec<Vec<Frame>> = (0..n)
             .map(|i| {
                 let len = r.random_range(0..=MAX_OUTBOX);
@@ -644,6 +665,7 @@ fn random_run(scenario: u64, radio_seed: u64) -> (Transcript, RadioStats) {
         let refs: Vec<&[Frame]> = out.iter().map(|v| v.as_slice()).collect();
         m.send(t, &refs, &pos, &talk, &mut |a, b| (a * 7 + b * 3) % 5 == 0);
         check(&m.stats());
+        rows.extend(m.take_log());
         assert_eq!(m.stats().frames, expected_frames);
         for p in pos.iter_mut() {
             p.0 += r.random_range(-1.0..1.0);
@@ -657,7 +679,140 @@ fn random_run(scenario: u64, radio_seed: u64) -> (Transcript, RadioStats) {
     }
     let s = m.stats();
     assert_eq!(s.in_flight, 0, "everything drains");
-    (transcript, s)
+    (transcript, s, rows)
+}
+
+/// Rows per outcome, in [`RadioOutcome::ALL`] order.
+fn outcome_counts(rows: &[RadioRow]) -> [u64; 8] {
+    let mut counts = [0; 8];
+    for r in rows {
+        counts[RadioOutcome::ALL
+            .iter()
+            .position(|&o| o == r.outcome)
+            .unwrap()] += 1;
+    }
+    counts
+}
+
+/// The counters in [`RadioOutcome::ALL`] order.
+fn counter_counts(s: &RadioStats) -> [u64; 8] {
+    [
+        s.delivered,
+        s.dropped_loss,
+        s.dropped_out_of_range,
+        s.dropped_capacity,
+        s.dropped_line_of_sight,
+        s.dropped_receiver_down,
+        s.dropped_inbox_full,
+        s.dropped_partition,
+    ]
+}
+
+/// Recording changes no inbox, counter or draw, and leaves one row per decided copy: per
+/// outcome as many as its counter, the delivered ones exactly the inboxes' frames.
+#[test]
+fn recording_changes_nothing_and_rows_match_the_counters() {
+    let mut totals = [0u64; 8];
+    for scenario in 0..40 {
+        let (plain, plain_stats) = random_run(scenario, scenario + 7);
+        let (recorded, stats, rows) = random_run_recorded(scenario, scenario + 7, true);
+        assert!(
+            plain == recorded,
+            "scenario {scenario}: recording changed an inbox"
+        );
+        assert_eq!(plain_stats, stats, "scenario {scenario}");
+        assert_eq!(rows.len() as u64, stats.sent - stats.in_flight);
+        assert_eq!(outcome_counts(&rows), counter_counts(&stats), "{stats:?}");
+        // Rows are in decision order: ticks never go back.
+        assert!(rows.windows(2).all(|w| w[0].tick <= w[1].tick));
+        for r in &rows {
+            assert!(r.sent_tick <= r.tick && r.bytes == 4);
+            assert!(r.to.is_some() || r.outcome == RadioOutcome::Capacity);
+        }
+        // The delivered rows are the inboxes, frame by frame, in delivery order.
+        let delivered: Vec<(u64, u32, u32, u64)> = rows
+            .iter()
+            .filter(|r| r.outcome == RadioOutcome::Delivered)
+            .map(|r| (r.tick, r.to.unwrap(), r.from, r.sent_tick))
+            .collect();
+        let inboxes: Vec<(u64, u32, u32, u64)> = recorded
+            .iter()
+            .flat_map(|(t, rx, inbox)| {
+                inbox
+                    .iter()
+                    .map(move |f| (*t, *rx as u32, f.src, f.sent_tick))
+            })
+            .collect();
+        assert_eq!(delivered, inboxes, "scenario {scenario}");
+        for (t, c) in totals.iter_mut().zip(counter_counts(&stats)) {
+            *t += c;
+        }
+    }
+    assert!(
+        totals.iter().all(|&c| c > 0),
+        "every outcome happened: {totals:?}"
+    );
+}
+
+/// Copies past a full inbox's worth wait as a count when not recording; recording, each gets
+/// its own row, with the same counters at every step.
+#[test]
+fn surplus_copies_get_one_row_each_when_recording() {
+    let n = 41;
+    let cfg = RadioConfig {
+        delay_ticks: 1,
+        capacity: 2,
+        ..base_cfg()
+    };
+    let pos: Vec<(f64, f64)> = (0..n).map(|i| (i as f64 * 0.1, 0.0)).collect();
+    let talk = vec![true; n];
+    let mut zero_down = talk.clone();
+    zero_down[0] = false;
+    let out: Vec<Vec<Frame>> = (0..n)
+        .map(|i| match i {
+            0 => vec![],
+            _ => vec![
+                frame(0, i as u32),
+                frame(BROADCAST, 1000 + i as u32),
+                frame(0, 7),
+            ],
+        })
+        .collect();
+    let (mut plain, mut recorded) = (RadioMedium::new(cfg, 1, n), RadioMedium::new(cfg, 1, n));
+    recorded.set_recording(true);
+    let mut rows = Vec::new();
+    for t in 0..2 {
+        for m in [&mut plain, &mut recorded] {
+            send(m, t, &out, &pos, &talk);
+        }
+        assert_eq!(plain.stats(), recorded.stats());
+        rows.extend(recorded.take_log());
+    }
+    for (t, talk) in [(2, &talk), (3, &zero_down)] {
+        let a = deliver(&mut plain, t, talk);
+        let b = deliver(&mut recorded, t, talk);
+        assert_eq!(a, b);
+        assert_eq!(plain.stats(), recorded.stats());
+        rows.extend(recorded.take_log());
+    }
+    let s = recorded.stats();
+    assert_eq!(s.in_flight, 0);
+    assert!(s.dropped_inbox_full > 0 && s.dropped_receiver_down >= 80);
+    assert_eq!(rows.len() as u64, s.sent);
+    assert_eq!(outcome_counts(&rows), counter_counts(&s));
+    // Capacity drops name the unicast receiver; robot 0's inbox-full rows at tick 2 name
+    // every sender past the first 16 in routing order.
+    assert!(
+        rows.iter()
+            .any(|r| r.outcome == RadioOutcome::Capacity && r.to == Some(0))
+    );
+    let full: Vec<u32> = rows
+        .iter()
+        .filter(|r| r.tick == 2 && r.to == Some(0) && r.outcome == RadioOutcome::InboxFull)
+        .map(|r| r.from)
+        .collect();
+    let expected: Vec<u32> = (17..=40).flat_map(|i| [i, i]).collect();
+    assert_eq!(full, expected);
 }
 
 #[test]

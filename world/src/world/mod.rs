@@ -279,6 +279,20 @@ impl World {
         self.timed(Stage::Faults, |w| w.apply_faults());
     }
 
+    /// Switches the radio record on or off (off when the world is built; the shells switch it
+    /// on before the first step when `scenario.record_radio` is set): while on, the medium
+    /// keeps a [`RadioRow`](swarmrt_protocol::records::RadioRow) per decided copy for
+    /// [`World::take_radio_rows`]. Nothing else a run does changes.
+    pub fn set_radio_recording(&mut self, on: bool) {
+        self.radio.set_recording(on);
+    }
+
+    /// The `radio.csv` rows of the copies decided since the last call, in the order the medium
+    /// decided them (empty while the radio record is off).
+    pub fn take_radio_rows(&mut self) -> Vec<records::RadioRow> {
+        self.radio.take_log()
+    }
+
     /// Switches the per-stage timers on or off (off when the world is built: the core reads
     /// no clock unless the shell asks). Switching keeps the times so far.
     pub fn set_stage_timing(&mut self, on: bool) {
