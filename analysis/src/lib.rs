@@ -8,11 +8,13 @@
 //! - [`consensus_check`]: Raft's safety properties and the consensus metrics, from the notes.
 //! - [`sweep_csv`]: `sweep.csv`, one row per finished run of a sweep.
 //! - [`stats`]: a sweep's rows grouped by combination, with their statistics.
+//! - [`export`]: a run in other formats (`swarm export --mcap`: MCAP for Foxglove).
 //! - [`plot`]: every figure: a run's trajectories, a sweep's metrics, a tune's progress, the
 //!   benchmarks'.
 #![warn(missing_docs)]
 
 pub mod consensus_check;
+pub mod export;
 pub mod metrics;
 pub mod plot;
 pub mod run_dir;

@@ -34,6 +34,10 @@ pub enum Cmd {
     /// Measure the IPC and the lock-step swarm against their alternatives (runs `swarm-bench`).
     #[command(disable_help_flag = true)]
     Bench(BenchArgs),
+    /// Watch a run in the browser: replay a run directory, or follow one that is still going.
+    View(ViewArgs),
+    /// Write a run in another format (MCAP, for Foxglove and ROS 2 tooling).
+    Export(ExportArgs),
     /// Seeded fault fuzzing of the consensus cores.
     #[command(subcommand)]
     Fuzz(FuzzCmd),
@@ -71,6 +75,44 @@ pub struct RunArgs {
     /// commands arrived; a robot that missed a tick keeps its last command. Not reproducible.
     #[arg(long, conflicts_with_all = ["in_process", "hosts"])]
     pub realtime: bool,
+    /// Serve a live view of the run in the browser (prints its URL); when the run ends the
+    /// page becomes its replay, served until Ctrl-C.
+    #[arg(long)]
+    pub view: bool,
+    /// How the --view page is served.
+    #[command(flatten)]
+    pub serve: ServeArgs,
+}
+
+/// Where the viewer's page is served.
+#[derive(Args, Debug, Clone)]
+pub struct ServeArgs {
+    /// Port of the page [default: a free one].
+    #[arg(long, default_value_t = 0)]
+    pub port: u16,
+    /// Address to listen on; anything but loopback exposes the run to the network.
+    #[arg(long, default_value = "127.0.0.1")]
+    pub listen: std::net::IpAddr,
+}
+
+/// `swarm view`.
+#[derive(Args, Debug, Clone)]
+pub struct ViewArgs {
+    /// The run directory (finished, crashed or still running).
+    pub run_dir: PathBuf,
+    /// How the page is served.
+    #[command(flatten)]
+    pub serve: ServeArgs,
+}
+
+/// `swarm export`.
+#[derive(Args, Debug, Clone)]
+pub struct ExportArgs {
+    /// The run directory.
+    pub run_dir: PathBuf,
+    /// Write the run as an MCAP file with Foxglove's schemas.
+    #[arg(long, value_name = "FILE")]
+    pub mcap: PathBuf,
 }
 
 /// `swarm check`.

@@ -28,6 +28,8 @@ fn main() -> std::process::ExitCode {
         Cmd::Tune(args) => commands::tune::tune(args, rx),
         // Dispatched above, before the handler exists; here only to keep the match whole.
         Cmd::Bench(args) => commands::bench::bench(args),
+        Cmd::View(args) => commands::view::view(args, rx),
+        Cmd::Export(args) => commands::export::export(args),
         Cmd::Fuzz(cmd) => commands::fuzz::fuzz(cmd, rx),
     };
     exit(result)

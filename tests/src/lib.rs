@@ -2,6 +2,7 @@
 //! `swarm` with a watchdog, and reads run directories.
 #![warn(missing_docs)]
 
+pub mod browser;
 pub mod c_robot;
 pub mod lab;
 pub mod python;

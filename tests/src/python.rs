@@ -1,5 +1,6 @@
 //! A Python for the tests of Python robots: a venv under the cargo target directory with the
-//! package in `bindings/python` installed, made once and shared by every test binary.
+//! package in `bindings/python` (and [`TEST_PACKAGES`]) installed, made once and shared by
+//! every test binary.
 //!
 //! `pip install ./bindings/python` is what a user runs too, so the tests use the package as
 //! it installs (with `iceoryx2` pinned to `Cargo.lock`'s version by its `pyproject.toml`), not
@@ -16,6 +17,11 @@ use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 
 use crate::workspace;
+
+/// PyPI packages the tests' scripts use besides the package (`mcap`:
+/// `tests/scripts/read_mcap.py` reads `swarm export --mcap` files with it). Part of the venv's
+/// stamp: adding one rebuilds the venv.
+pub const TEST_PACKAGES: &[&str] = &["mcap"];
 
 /// The package's directory in the workspace.
 pub fn package_dir() -> PathBuf {
@@ -157,7 +163,12 @@ fn ensure_venv() -> Result<PathBuf, String> {
     }
 
     // The stamp names the Python too: a venv whose interpreter vanished is rebuilt.
-    let want = format!("{}\n{}", fingerprint(&pkg), python.display());
+    let want = format!(
+        "{}\n{}\n{}",
+        fingerprint(&pkg),
+        python.display(),
+        TEST_PACKAGES.join(" ")
+    );
     let current = python.exists() && std::fs::read_to_string(&stamp).is_ok_and(|s| s == want);
     if current {
         return Ok(python);
@@ -174,6 +185,7 @@ fn ensure_venv() -> Result<PathBuf, String> {
                 "--disable-pip-version-check",
             ])
             .arg(&pkg)
+            .args(TEST_PACKAGES)
             .env("PYTHONDONTWRITEBYTECODE", "1"),
         &format!("pip install {}", pkg.display()),
     )?;

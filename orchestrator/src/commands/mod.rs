@@ -3,8 +3,10 @@
 pub mod bench;
 pub mod check;
 pub mod clean;
+pub mod export;
 pub mod fuzz;
 pub mod plan;
 pub mod run;
 pub mod sweep;
 pub mod tune;
+pub mod view;

@@ -28,10 +28,31 @@ fn progress_bar(total: u64) -> ProgressBar {
     pb
 }
 
-/// Runs a scenario; returns the run directory.
+/// Runs a scenario; returns the run directory. With `--view`, the page follows the run and,
+/// once it is over, stays up as its replay until Ctrl-C.
 pub fn run(
     args: &RunArgs,
     interrupt: crossbeam_channel::Receiver<()>,
+) -> SwarmResult<std::path::PathBuf> {
+    let mut viewer = None;
+    let result = run_with(args, interrupt.clone(), &mut viewer);
+    // A failed run says so at once (exit 1); its records stay viewable with `swarm view`.
+    if let (Some(v), Ok(_)) = (viewer, &result) {
+        // A Ctrl-C that stopped the run was spent on it; the replay waits for the next one.
+        eprintln!(
+            "the run is over: its replay stays at {} until Ctrl-C",
+            v.url()
+        );
+        let _ = interrupt.recv();
+        v.stop();
+    }
+    result
+}
+
+fn run_with(
+    args: &RunArgs,
+    interrupt: crossbeam_channel::Receiver<()>,
+    viewer: &mut Option<swarmrt_viewer::Viewer>,
 ) -> SwarmResult<std::path::PathBuf> {
     let mut set = args.set.clone();
     if let Some(seed) = args.seed {
@@ -41,6 +62,12 @@ pub fn run(
         set.push(format!("scenario.ticks={ticks}"));
     }
     let cfg = load_config(&args.config, &set)?;
+    // The page's port first: a port in use is refused before the run writes anything.
+    let socket = if args.view {
+        Some(super::view::bind(&args.serve)?)
+    } else {
+        None
+    };
     if args.in_process {
         crate::config::refuse_foreign_in_process(&cfg, &args.config, "--in-process")?;
     }
@@ -71,6 +98,12 @@ pub fn run(
         _ => None,
     };
     run_dir::reserve_metrics_room(&dir, cfg.robots.count);
+    if let Some(socket) = socket {
+        // Reads the records as the run writes them: attaching it changes no record byte.
+        let v = super::view::start(&dir, socket)?;
+        eprintln!("watch the run at {}", v.url());
+        *viewer = Some(v);
+    }
     let pb = progress_bar(cfg.scenario.ticks);
     let started = Instant::now();
     let mut metrics = json!({
