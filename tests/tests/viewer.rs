@@ -4,27 +4,20 @@
 
 use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::Child;
 use std::time::Duration;
 
 use fantoccini::actions::InputSource;
 use serde_json::Value;
 use swarmrt_tests::browser::Browser;
-use swarmrt_tests::{assert_ok, run_config, swarm, swarm_bin, wait_with_watchdog, workspace};
+use swarmrt_tests::{assert_ok, run_config, spawn_swarm, swarm, wait_with_watchdog};
 
 const LIMIT: Duration = Duration::from_secs(60);
 
 /// Starts `swarm args...` and returns it with the page's URL, read from its output (`swarm
 /// view` prints it on stdout, `swarm run --view` on stderr).
 fn start_viewer(args: &[&str]) -> (Child, String) {
-    let mut child = Command::new(swarm_bin())
-        .current_dir(workspace())
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("swarm starts");
+    let mut child = spawn_swarm(args, &[]);
     let (tx, rx) = std::sync::mpsc::channel::<String>();
     let out = child.stdout.take().unwrap();
     let err = child.stderr.take().unwrap();
@@ -84,6 +77,16 @@ fn csv_pose(dir: &Path, tick: u64, id: u32) -> (f64, f64) {
     (f[0], f[1])
 }
 
+/// Moves the scrubber to `frame` as its `input` event does, and waits until it is drawn.
+async fn scrub_to(b: &Browser, frame: u64) {
+    b.eval(&format!(
+        "document.getElementById('scrub').value = {frame}, document.getElementById('scrub').dispatchEvent(new Event('input'))"
+    ))
+    .await;
+    b.wait_for(&format!("swarmView.drawnFrame === {frame}"), LIMIT)
+        .await;
+}
+
 fn num(v: &Value) -> f64 {
     v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
 }
@@ -118,29 +121,11 @@ async fn replay_plays_scrubs_jumps_to_events_and_inspects_robots() {
     b.screenshot("replay-start").await;
 
     // Play: the tick advances on its own.
-    b.client
-        .find(fantoccini::Locator::Css("#speed"))
-        .await
-        .unwrap()
-        .select_by_value("2")
-        .await
-        .unwrap();
-    b.client
-        .find(fantoccini::Locator::Css("#play"))
-        .await
-        .unwrap()
-        .click()
-        .await
-        .unwrap();
+    b.select("#speed", "2").await;
+    b.click("#play").await;
     b.wait_for("swarmView.playing && swarmView.drawnFrame >= 20", LIMIT)
         .await;
-    b.client
-        .find(fantoccini::Locator::Css("#play"))
-        .await
-        .unwrap()
-        .click()
-        .await
-        .unwrap();
+    b.click("#play").await;
     assert_eq!(b.eval("swarmView.playing").await, false);
 
     // Scrub to tick T with the keyboard on the scrubber, as a user can: robot k is drawn
@@ -215,14 +200,7 @@ async fn replay_plays_scrubs_jumps_to_events_and_inspects_robots() {
     let row = b.eval("swarmView.inspected.row").await;
     assert_eq!(row["id"], 3);
     assert_eq!(num(&row["tick"]) as u64, target);
-    let panel = b
-        .client
-        .find(fantoccini::Locator::Css("#inspector"))
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
+    let panel = b.text("#inspector").await;
     assert!(panel.contains("pose") && panel.contains("state"), "{panel}");
     b.screenshot("replay-inspect").await;
 
@@ -247,19 +225,11 @@ async fn replay_plays_scrubs_jumps_to_events_and_inspects_robots() {
     let hl = b.eval("swarmView.highlight.robots").await;
     assert!(hl.as_array().is_some_and(|r| !r.is_empty()), "{hl}");
     // Next event / previous event buttons move between marks.
-    b.client
-        .find(fantoccini::Locator::Css("#prev-event"))
-        .await
-        .unwrap()
-        .click()
-        .await
-        .unwrap();
+    b.click("#prev-event").await;
     b.wait_for(&format!("swarmView.tick < {tick}"), LIMIT).await;
     b.screenshot("replay-event").await;
     // Where the two flocks meet (the README's picture).
-    b.eval("document.getElementById('scrub').value = 440, document.getElementById('scrub').dispatchEvent(new Event('input'))")
-        .await;
-    b.wait_for("swarmView.drawnFrame === 440", LIMIT).await;
+    scrub_to(&b, 440).await;
     b.screenshot("flocks-meet").await;
     assert_eq!(b.eval("swarmView.error").await, Value::Null);
     b.close().await;
@@ -307,23 +277,10 @@ async fn live_view_follows_the_run_and_becomes_its_replay() {
         .await;
     let frames = num(&b.eval("swarmView.status.frames").await) as u64;
     assert!(frames >= 150, "{frames}");
-    let badge = b
-        .client
-        .find(fantoccini::Locator::Css("#state"))
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
+    let badge = b.text("#state").await;
     assert_eq!(badge, "replay");
     // As a replay it plays from the start.
-    b.client
-        .find(fantoccini::Locator::Css("#play"))
-        .await
-        .unwrap()
-        .click()
-        .await
-        .unwrap();
+    b.click("#play").await;
     b.wait_for("swarmView.playing", LIMIT).await;
     b.screenshot("live-then-replay").await;
     b.close().await;
@@ -354,14 +311,7 @@ async fn crashed_run_replays_to_its_last_whole_tick_with_a_banner() {
     assert_eq!(b.eval("swarmView.status.state").await, "crashed");
     // 61 ticks (0..=60) recorded; the last one is torn.
     assert_eq!(b.eval("swarmView.status.frames").await, 60);
-    let banner = b
-        .client
-        .find(fantoccini::Locator::Css("#banner"))
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
+    let banner = b.text("#banner").await;
     assert!(banner.contains("last whole tick, 59"), "{banner}");
     b.screenshot("crashed").await;
     b.close().await;
@@ -495,9 +445,7 @@ async fn consensus_lanes_roles_and_the_aerial_side_view_are_drawn() {
         .eval("swarmView.markers.filter(m => m.kind === 'elected').length")
         .await;
     assert!(num(&elected) >= 1.0, "an election is on the timeline");
-    b.eval("document.getElementById('scrub').value = 250, document.getElementById('scrub').dispatchEvent(new Event('input'))")
-        .await;
-    b.wait_for("swarmView.drawnFrame === 250", LIMIT).await;
+    scrub_to(&b, 250).await;
     b.screenshot("raft-lanes").await;
     interrupt(&viewer);
     wait_exit(viewer);
@@ -518,9 +466,7 @@ async fn consensus_lanes_roles_and_the_aerial_side_view_are_drawn() {
         b.eval("!document.getElementById('side').hidden").await,
         true
     );
-    b.eval("document.getElementById('scrub').value = 200, document.getElementById('scrub').dispatchEvent(new Event('input'))")
-        .await;
-    b.wait_for("swarmView.drawnFrame === 200", LIMIT).await;
+    scrub_to(&b, 200).await;
     let roles: Vec<String> = (0..3)
         .map(|k| format!("swarmView.robot({k}).role"))
         .collect();
@@ -583,21 +529,9 @@ async fn viewer_scale() {
         let load = started.elapsed().as_secs_f64();
         let mut fps = Vec::new();
         for speed in ["8", "64"] {
-            b.client
-                .find(fantoccini::Locator::Css("#speed"))
-                .await
-                .unwrap()
-                .select_by_value(speed)
-                .await
-                .unwrap();
+            b.select("#speed", speed).await;
             b.eval("document.getElementById('scrub').value = 0, document.getElementById('scrub').dispatchEvent(new Event('input'))").await;
-            b.client
-                .find(fantoccini::Locator::Css("#play"))
-                .await
-                .unwrap()
-                .click()
-                .await
-                .unwrap();
+            b.click("#play").await;
             tokio::time::sleep(Duration::from_secs(1)).await;
             let d0 = num(&b.eval("swarmView.drawn").await);
             let t0 = std::time::Instant::now();
