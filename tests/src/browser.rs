@@ -106,6 +106,8 @@ impl Browser {
                 Err(e) => panic!("cannot start a chromium session: {e}"),
             }
         };
+        // The window flag sizes the screen; the viewport follows only when asked.
+        let _ = client.set_window_size(width, height).await;
         Browser {
             driver,
             client,

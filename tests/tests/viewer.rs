@@ -230,6 +230,11 @@ async fn replay_plays_scrubs_jumps_to_events_and_inspects_robots() {
     b.screenshot("replay-event").await;
     // Where the two flocks meet (the README's picture).
     scrub_to(&b, 440).await;
+    b.wait_for(
+        "swarmView.inspected && swarmView.inspected.row.tick === 440",
+        LIMIT,
+    )
+    .await;
     b.screenshot("flocks-meet").await;
     assert_eq!(b.eval("swarmView.error").await, Value::Null);
     b.close().await;

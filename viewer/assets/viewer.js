@@ -73,8 +73,9 @@ function loadChunk(c) {
   const whole = have && have.end === full && have.pieces.length > 1;
   const from = have && !whole ? have.end : c * cf;
   if (from >= Math.min(full, V.status.frames) && !whole) return null;
-  const p = fetch(`/api/frames?from=${from}&to=${full}`)
-    .then((r) => { if (!r.ok) throw new Error(`frames: ${r.status}`); return r.arrayBuffer(); })
+  const url = `/api/frames?from=${from}&to=${full}`;
+  const p = fetch(url)
+    .then((r) => { if (!r.ok) throw new Error(`${url}: ${r.status}`); return r.arrayBuffer(); })
     .then((buf) => {
       const piece = parsePiece(buf);
       let chunk = V.chunks.get(c);
@@ -125,7 +126,7 @@ function chunkFor(frame) {
 }
 
 function ensure(frame) {
-  if (!V.status || frame >= V.status.frames) return;
+  if (!V.status || !(frame >= 0) || frame >= V.status.frames) return;
   const c = V.chunks.get(chunkOf(frame));
   const full = (chunkOf(frame) + 1) * V.meta.chunk_frames;
   if (!chunkFor(frame) || (c && c.end === full && c.pieces.length > 1)) loadChunk(chunkOf(frame));
@@ -861,7 +862,8 @@ function loop(now) {
   requestAnimationFrame(loop);
   if (!V.meta || !V.status) return;
   if (V.playing) {
-    const dt = Math.min(0.25, (now - (V.lastNow || now)) / 1000);
+    // rAF's time is when the frame began, which can be before a click's performance.now()
+    const dt = Math.max(0, Math.min(0.25, (now - (V.lastNow || now)) / 1000));
     const next = V.pos + dt * V.speed / V.meta.dt;
     const last = lastFrame();
     if (chunkFor(Math.min(last, Math.floor(next))) || Math.floor(next) === V.frame) {
