@@ -1,6 +1,7 @@
 //! A real browser for the viewer's tests: Debian's `chromium` driven by `chromedriver` over
 //! WebDriver (with `fantoccini`), both installed with apt when missing.
 
+use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -64,7 +65,10 @@ impl Browser {
     pub async fn start(width: u32, height: u32) -> Browser {
         ensure_chromium();
         let port = free_port();
+        // Its own process group, so the browsers it starts die with it even when a test
+        // panics before it can close the session.
         let driver = Command::new(CHROMEDRIVER)
+            .process_group(0)
             .arg(format!("--port={port}"))
             .stdout(Stdio::null())
             .stderr(Stdio::null())
@@ -182,17 +186,17 @@ impl Browser {
         path
     }
 
-    /// Ends the session and the driver.
-    pub async fn close(mut self) {
+    /// Ends the session, then the driver and its browsers (on drop).
+    pub async fn close(self) {
         let _ = self.client.clone().close().await;
-        let _ = self.driver.kill();
-        let _ = self.driver.wait();
     }
 }
 
 impl Drop for Browser {
     fn drop(&mut self) {
-        let _ = self.driver.kill();
+        unsafe {
+            libc::kill(-(self.driver.id() as i32), libc::SIGKILL);
+        }
         let _ = self.driver.wait();
     }
 }
