@@ -239,6 +239,18 @@ impl Remotes {
         Some(why)
     }
 
+    /// The world stopped hearing host `name` (its link outlived Zenoh's lease) and marked its
+    /// robots dead: the host is lost unless it had finished, whether or not its launcher has
+    /// ended yet (before, `metrics.json` said so only when the launcher's exit came first).
+    pub fn link_lost(&mut self, name: &str) {
+        if let Some(h) = self.hosts.iter_mut().find(|h| h.name == name)
+            && !h.done
+        {
+            h.lost
+                .get_or_insert_with(|| "the world stopped hearing it (link lost)".to_string());
+        }
+    }
+
     /// Why the host is lost, if it is.
     pub fn lost(&self, host: usize) -> Option<&str> {
         self.hosts[host].lost.as_deref()

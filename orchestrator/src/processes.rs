@@ -558,6 +558,9 @@ fn supervise(
             }
             Msg::Host(_, HostMsg::Eof) => {}
             Msg::Report(WorldReport::HostLost { host, robots }) => {
+                if let Some(r) = remotes.as_mut() {
+                    r.link_lost(&host);
+                }
                 for robot in robots {
                     outcome
                         .unscheduled_deaths
