@@ -131,18 +131,34 @@ pub struct Row {
     pub active: bool,
 }
 
-/// Where each field of [`Row`] is in a `trajectory.csv` line, found from its header.
+/// Where each column is in a `trajectory.csv` line, found from its header (readers that need
+/// more than a [`Row`], such as the viewer's robot inspector, index lines with it).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Columns {
-    tick: usize,
-    id: usize,
-    x: usize,
-    y: usize,
-    z: Option<usize>,
-    theta: usize,
-    lidar: usize,
-    state: usize,
-    count: usize,
+    /// `tick`.
+    pub tick: usize,
+    /// `id`.
+    pub id: usize,
+    /// `x`.
+    pub x: usize,
+    /// `y`.
+    pub y: usize,
+    /// `z`, aerial records only.
+    pub z: Option<usize>,
+    /// `theta`.
+    pub theta: usize,
+    /// `v`.
+    pub v: usize,
+    /// `vz`, aerial records only.
+    pub vz: Option<usize>,
+    /// `omega`.
+    pub omega: usize,
+    /// `lidar`.
+    pub lidar: usize,
+    /// `state`.
+    pub state: usize,
+    /// How many columns a whole line has.
+    pub count: usize,
 }
 
 impl Columns {
@@ -162,6 +178,9 @@ impl Columns {
             y: at("y")?,
             z: at("z").ok(),
             theta: at("theta")?,
+            v: at("v")?,
+            vz: at("vz").ok(),
+            omega: at("omega")?,
             lidar: at("lidar")?,
             state: at("state")?,
             count: names.len(),

@@ -9,6 +9,7 @@
 use std::path::{Path, PathBuf};
 
 use swarmrt_protocol::RobotState;
+use swarmrt_protocol::records::Columns;
 
 /// Bytes of one robot in one frame: `f32` x, y, z, theta, then `u8` state, role, flags
 /// (bit 0: lidar on) and one spare byte; little-endian.
@@ -17,49 +18,6 @@ pub const ROBOT_BYTES: usize = 20;
 pub const FRAMES_MAGIC: u32 = u32::from_le_bytes(*b"SWVF");
 /// Role byte of a robot whose behaviour gives it none.
 pub const NO_ROLE: u8 = 255;
-
-/// Where a `trajectory.csv` column is.
-#[derive(Debug, Clone, Copy)]
-struct Columns {
-    tick: usize,
-    id: usize,
-    x: usize,
-    y: usize,
-    z: Option<usize>,
-    theta: usize,
-    v: usize,
-    vz: Option<usize>,
-    omega: usize,
-    lidar: usize,
-    state: usize,
-    count: usize,
-}
-
-impl Columns {
-    fn from_header(header: &str) -> Result<Columns, String> {
-        let names: Vec<&str> = header.trim_end().split(',').collect();
-        let at = |name: &str| {
-            names
-                .iter()
-                .position(|n| *n == name)
-                .ok_or_else(|| format!("trajectory.csv has no `{name}` column"))
-        };
-        Ok(Columns {
-            tick: at("tick")?,
-            id: at("id")?,
-            x: at("x")?,
-            y: at("y")?,
-            z: at("z").ok(),
-            theta: at("theta")?,
-            v: at("v")?,
-            vz: at("vz").ok(),
-            omega: at("omega")?,
-            lidar: at("lidar")?,
-            state: at("state")?,
-            count: names.len(),
-        })
-    }
-}
 
 /// One robot's row, every column (what the page shows of a clicked robot).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
