@@ -77,23 +77,61 @@ pub fn raise_fd_limit() -> std::io::Result<u64> {
     Ok(lim.rlim_cur)
 }
 
-/// Creates a node named `name` with the run's config.
+/// Creates a node named `name` with the run's config, and makes SIGINT and SIGTERM stick
+/// for [`termination_requested`].
 pub fn node(run: &RunServices, name: &str) -> Result<Node<Svc>, IpcError> {
     let cfg = ipc_config(run)?;
     let name = NodeName::new(name).map_err(|e| format!("node name {name}: {e:?}"))?;
-    Ok(NodeBuilder::new()
+    let node = NodeBuilder::new()
         .name(&name)
         .config(&cfg)
-        .create::<Svc>()?)
+        .create::<Svc>()?;
+    note_termination_signals();
+    Ok(node)
 }
 
-/// True once SIGINT or SIGTERM reached this process (iceoryx2's handler notes it), for a
-/// node that handles termination requests: the check [`Node::wait`] makes, without its
-/// `nanosleep`. A zero-length sleep is still a syscall and a trip through the scheduler, which
-/// every robot paid once a tick (~4 % of a goto robot's CPU at 100 robots, by perf).
+/// Set by [`on_termination_signal`]; never cleared.
+static TERMINATION: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+extern "C" fn on_termination_signal(_: libc::c_int) {
+    TERMINATION.store(true, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Routes SIGINT and SIGTERM to a flag of our own. iceoryx2's handler keeps only the *last*
+/// signal, so the SIGCONT the orchestrator sends right after SIGTERM (a stopped process acts on
+/// SIGTERM only once continued) erased the request and the robot sat out its grace period
+/// until SIGKILL (`crashes::ctrl_c_during_start_up...`, 1 run in 12 under load). No
+/// `SA_RESTART`, like iceoryx2: a listener's wait still ends with `EINTR` on these signals.
+pub fn note_termination_signals() {
+    use iceoryx2_bb_posix::signal::SignalHandler;
+    static INSTALLED: std::sync::Once = std::sync::Once::new();
+    INSTALLED.call_once(|| {
+        // The first call installs iceoryx2's handlers (ours must come after them to win) and
+        // returns what they caught so far; the second, what arrived before ours took over.
+        let before = SignalHandler::termination_requested();
+        for signal in [libc::SIGINT, libc::SIGTERM] {
+            // SAFETY: a zeroed sigaction with an empty mask and a handler that only stores an
+            // atomic, which is async-signal-safe.
+            unsafe {
+                let mut action: libc::sigaction = std::mem::zeroed();
+                action.sa_sigaction = on_termination_signal as *const () as libc::sighandler_t;
+                libc::sigemptyset(&mut action.sa_mask);
+                libc::sigaction(signal, &action, std::ptr::null_mut());
+            }
+        }
+        if before || SignalHandler::termination_requested() {
+            TERMINATION.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+    });
+}
+
+/// True once SIGINT or SIGTERM reached this process, for a node that handles termination
+/// requests: the check [`Node::wait`] makes, without its `nanosleep` (a zero-length sleep is
+/// still a syscall, which every robot paid once a tick: ~4 % of a goto robot's CPU at 100
+/// robots, by perf). Sticky: a later signal (SIGCONT, SIGCHLD) does not undo it.
 pub fn termination_requested(node: &Node<Svc>) -> bool {
     node.signal_handling_mode() == SignalHandlingMode::HandleTerminationRequests
-        && iceoryx2_bb_posix::signal::SignalHandler::termination_requested()
+        && TERMINATION.load(std::sync::atomic::Ordering::Relaxed)
 }
 
 fn service_name(s: &str) -> Result<ServiceName, IpcError> {

@@ -67,6 +67,39 @@ for name in m.LAYOUT:
     assert_eq!(have, swarmrt_protocol::layout::layout_lines());
 }
 
+/// The orchestrator sends SIGCONT right after SIGTERM (a stopped robot acts on SIGTERM only
+/// once continued); iceoryx2's handler keeps only the last signal, so the request was lost.
+#[test]
+fn a_python_robot_keeps_a_sigterm_that_a_sigcont_follows() {
+    let script = r#"
+import os, signal
+import iceoryx2 as iox2
+from swarmrt import robot
+node = iox2.NodeBuilder.new().create(iox2.ServiceType.Local)
+robot._note_termination_signals()
+os.kill(os.getpid(), signal.SIGCONT)
+print("after SIGCONT", robot._terminated)
+os.kill(os.getpid(), signal.SIGTERM)
+os.kill(os.getpid(), signal.SIGCONT)
+print("after SIGTERM, SIGCONT", robot._terminated)
+"#;
+    let out = Command::new(python::python())
+        .args(["-c", script])
+        .stdin(Stdio::null())
+        .output()
+        .expect("the venv's python runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        stdout.lines().collect::<Vec<_>>(),
+        ["after SIGCONT False", "after SIGTERM, SIGCONT True"]
+    );
+}
+
 #[test]
 fn the_python_package_pins_the_iceoryx2_of_cargo_lock() {
     let lock: toml::Table = std::fs::read_to_string(workspace().join("Cargo.lock"))

@@ -23,16 +23,18 @@ The rules it follows, and why:
   the world expects no answer), a DOWN robot still answers (the world ignores the command).
 * A sample with `shutdown != 0` ends the generator with `exit_code` 0; that, and only that,
   is what exit code 0 means to the orchestrator.
-* The wait is `timed_wait(500 ms)` then `node.wait(0)`: the timeout is a watchdog, not a poll.
-  An interrupted wait is a spurious wake (SIGCONT after a scheduled freeze fails the wait with
-  EINTR); only `node.wait` reporting a termination request (iceoryx2's SIGTERM/SIGINT
-  handler) ends the generator, with `exit_code` 143.
+* The wait is `timed_wait(500 ms)`: the timeout is a watchdog, not a poll. An interrupted
+  wait is a spurious wake (SIGCONT after a scheduled freeze fails the wait with EINTR); only
+  SIGTERM/SIGINT ends the generator, with `exit_code` 143. They are noted by a handler of
+  this module, not iceoryx2's: that one keeps only the last signal, and the orchestrator
+  sends SIGCONT right after SIGTERM, which erased the request.
 """
 
 from __future__ import annotations
 
 import ctypes
 import os
+import signal
 import sys
 import tomllib
 from typing import Iterator, Optional
@@ -73,6 +75,26 @@ def _env(name: str) -> str:
             f"{name} is not set: this program is a swarmrt robot and must be started by "
             "`swarm run` (robots.program in the config)"
         ) from None
+
+
+_terminated = False
+"""Set by SIGTERM or SIGINT once a robot's node exists; never cleared."""
+
+
+def _on_termination_signal(signum, frame) -> None:
+    global _terminated
+    _terminated = True
+
+
+def _note_termination_signals() -> None:
+    """Routes SIGTERM and SIGINT to `_terminated`, replacing the handlers iceoryx2 installed
+    with the node (it keeps only the last signal, so a SIGCONT after SIGTERM erased the
+    request). Python handlers exist only in the main thread; elsewhere iceoryx2's stay."""
+    try:
+        for s in (signal.SIGTERM, signal.SIGINT):
+            signal.signal(s, _on_termination_signal)
+    except ValueError:
+        pass
 
 
 class Robot:
@@ -134,6 +156,7 @@ class Robot:
             .config(cfg)
             .create(iox2.ServiceType.Ipc)
         )
+        _note_termination_signals()
         obs_name = iox2.ServiceName.new(_env("SWARMRT_OBSERVATIONS"))
         cmd_name = iox2.ServiceName.new(_env("SWARMRT_COMMANDS"))
         observations = (
@@ -241,7 +264,11 @@ class Robot:
                 # SIGCONT ending a scheduled freeze, after which Linux fails it with EINTR.
                 if "InterruptSignal" not in str(e):
                     raise
+            if _terminated:
+                self.exit_code = EXIT_TERMINATED
+                return
             try:
+                # iceoryx2's own note, for a robot outside the main thread.
                 self._node.wait(self._zero)
             except iox2.NodeWaitFailure:
                 self.exit_code = EXIT_TERMINATED
