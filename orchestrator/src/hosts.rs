@@ -86,14 +86,15 @@ fn host_command(file: &HostsFile, i: usize, run_id: &str, program: &Path) -> std
 
 impl Remotes {
     /// Starts every host's `swarm-host` through its launcher and gives it the config. Each
-    /// host's reports come to `tx` as `wrap(host, msg)`; `watch` reaps a launcher.
+    /// host's reports come to `tx` as `wrap(host, msg)`; `watch` reaps a launcher and gets a
+    /// channel whose sender is dropped once that launcher's stdout has ended.
     pub fn launch<M: Send + 'static>(
         file: &HostsFile,
         run_id: &str,
         config_path: &Path,
         tx: &Sender<M>,
         wrap: fn(usize, HostMsg) -> M,
-        watch: impl Fn(i32) -> std::io::Result<()>,
+        watch: impl Fn(i32, crossbeam_channel::Receiver<()>) -> std::io::Result<()>,
     ) -> anyhow::Result<Remotes> {
         let program = crate::processes::sibling_binary("swarm-host")?;
         let toml = std::fs::read_to_string(config_path)
@@ -136,7 +137,10 @@ impl Remotes {
             }
             let stdout = child.stdout.take().context("host stdout")?;
             let tx2 = tx.clone();
+            let (eof_tx, eof_rx) = crossbeam_channel::bounded::<()>(0);
             std::thread::spawn(move || {
+                // Dropped after the last message: the launcher's reaper waits for that.
+                let _eof = eof_tx;
                 for line in BufReader::new(stdout).lines() {
                     let Ok(line) = line else { break };
                     match serde_json::from_str::<HostReport>(&line) {
@@ -160,7 +164,7 @@ impl Remotes {
                 lost: None,
                 stats: None,
             });
-            if let Err(e) = watch(pid) {
+            if let Err(e) = watch(pid, eof_rx) {
                 remotes.hosts = hosts;
                 remotes.kill();
                 return Err(anyhow::anyhow!(

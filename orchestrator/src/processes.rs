@@ -28,6 +28,9 @@ pub use swarmrt_scenario::process::{child_command, describe, signal_all};
 /// than 1 s to be scheduled, see its shutdown and exit (`tests/tests/faults.rs`, under the
 /// whole test suite).
 const SHUTDOWN_GRACE: Duration = Duration::from_secs(3);
+/// How long a host launcher's exit waits for the end of its stdout, which a process it
+/// started may still hold open.
+const LAUNCHER_EOF_WAIT: Duration = Duration::from_secs(2);
 /// How long children get after SIGTERM before they are killed.
 const EXIT_GRACE: Duration = Duration::from_secs(10);
 
@@ -112,7 +115,13 @@ pub fn sibling_binary(name: &str) -> anyhow::Result<PathBuf> {
 /// Reaps one child: a small thread blocked in `waitpid(pid)`, so iceoryx2 never sees a zombie
 /// and a run never reaps a process that is not its own (an orchestrator may run several runs,
 /// as `swarm bench swarm` does, or have other children).
-fn reap(pid: i32, tx: Sender<Msg>) -> std::io::Result<()> {
+///
+/// With `after`, the exit is reported only once that channel's senders are gone (or
+/// [`LAUNCHER_EOF_WAIT`] later): a host launcher's stdout reader holds one, so the host's last
+/// report (`Done`) is on the channel before its exit. Without it, the exit of a launcher that
+/// finished could be judged first and the host called lost (`multihost::three_hosts...`,
+/// 1 run in ~10).
+fn reap(pid: i32, tx: Sender<Msg>, after: Option<Receiver<()>>) -> std::io::Result<()> {
     std::thread::Builder::new()
         .name(format!("reap-{pid}"))
         .stack_size(64 * 1024)
@@ -131,6 +140,9 @@ fn reap(pid: i32, tx: Sender<Msg>) -> std::io::Result<()> {
                         std::io::Error::last_os_error()
                     )
                 };
+                if let Some(after) = &after {
+                    let _ = after.recv_timeout(LAUNCHER_EOF_WAIT);
+                }
                 let _ = tx.send(Msg::Exited { pid, how });
                 return;
             }
@@ -141,7 +153,7 @@ fn reap(pid: i32, tx: Sender<Msg>) -> std::io::Result<()> {
 /// Starts a robot's reaper; if even that fails, the robot is killed and reaped here so it
 /// cannot outlive the run unseen.
 fn reap_robot(pid: i32, tx: &Sender<Msg>) -> std::io::Result<()> {
-    reap(pid, tx.clone()).inspect_err(|_| {
+    reap(pid, tx.clone(), None).inspect_err(|_| {
         signal_all(&[pid], libc::SIGKILL);
         let mut status = 0;
         // SAFETY: as in `reap`; the child was just sent SIGKILL, so this returns promptly.
@@ -297,7 +309,7 @@ fn supervise(
             let _ = tx.send(Msg::WorldEof);
         });
     }
-    if let Err(e) = reap(world_pid, tx.clone()) {
+    if let Err(e) = reap(world_pid, tx.clone(), None) {
         signal_all(&[world_pid], libc::SIGKILL);
         let _ = world.wait();
         bail!("cannot watch the world process: {e}");
@@ -335,9 +347,14 @@ fn supervise(
     let mut remotes = match hosts {
         None => None,
         Some(h) => {
-            match Remotes::launch(&h.file, run.run_id(), config_path, &tx, Msg::Host, |pid| {
-                reap(pid, tx.clone())
-            }) {
+            match Remotes::launch(
+                &h.file,
+                run.run_id(),
+                config_path,
+                &tx,
+                Msg::Host,
+                |pid, eof| reap(pid, tx.clone(), Some(eof)),
+            ) {
                 Ok(r) => Some(r),
                 Err(e) => {
                     send_control(&mut world_stdin, &Control::Stop);
@@ -712,6 +729,7 @@ fn wait_for_exit(
             Err(crossbeam_channel::RecvTimeoutError::Timeout) if stage == 1 => {
                 tracing::warn!(
                     count = left.len(),
+                    pids = ?pending,
                     "processes did not exit in time; killing them"
                 );
                 signal_all(&pending, libc::SIGKILL);
