@@ -15,6 +15,7 @@ use serde::de::DeserializeOwned;
 use serde_json::Value;
 use swarmrt_protocol::Observation;
 use swarmrt_protocol::records::Records;
+use swarmrt_scenario::reference::Key;
 use swarmrt_scenario::{Config, KeyError};
 
 use crate::consensus::{Decision, Leadership};
@@ -25,6 +26,10 @@ use crate::inbox::Heard;
 pub trait Params:
     Serialize + DeserializeOwned + Default + Debug + Clone + PartialEq + Send + Sync + 'static
 {
+    /// One row per `[behaviour]` key (`behaviour.<field>`): bounds, unit and meaning, for
+    /// `docs/config.md` and for [`Params::validate`], which reads its constant bounds from it.
+    const KEYS: &'static [Key];
+
     /// Checks every value against its bounds; the key is `behaviour.<field>`.
     fn validate(&self, cfg: &Config) -> Result<(), KeyError>;
 }

@@ -5,7 +5,7 @@
 //! Where things are: [`behaviours`] (one folder per behaviour, listed once in [`registry`]),
 //! [`consensus`] (election, replicated log, quadrant leader choice), [`inbox`] (a decoded
 //! radio message), [`agent`] (one robot's tick), [`overlay`] (what a viewer draws of each
-//! behaviour: roles, headlines, consensus lanes).
+//! behaviour: roles, headlines, consensus lanes), [`wire`] (the envelopes' fixed wire tags).
 //!
 //! ```
 //! use swarmrt_agent::{Agent, registry};
@@ -40,6 +40,7 @@ pub mod inbox;
 pub mod overlay;
 pub mod registry;
 pub mod shell;
+pub mod wire;
 
 pub use agent::Agent;
 pub use registry::{Note, RadioMsg};

@@ -4,9 +4,10 @@
 //! ([`RadioMsg`], [`Note`]), makes its `kind` loadable from a config, and its metrics
 //! computable from the records.
 //!
-//! The envelopes are postcard-encoded enums, one variant per behaviour (the variant order is
-//! the line order), then the consensus layer's: the world checks that a frame decodes as a
-//! [`RadioMsg`] and records each [`Note`] as JSON, through [`VOCABULARY`].
+//! The envelopes are postcard-encoded enums, one variant per behaviour (in line order), then
+//! the consensus layer's, each written with the wire tag its line declares ([`crate::wire`]),
+//! not its index: the world checks that a frame decodes as a [`RadioMsg`] and records each
+//! [`Note`] as JSON, through [`VOCABULARY`].
 
 use std::marker::PhantomData;
 
@@ -14,6 +15,7 @@ use serde::{Deserialize as _, Serialize};
 use serde_json::Value;
 use swarmrt_protocol::records::Records;
 use swarmrt_protocol::{Command, NoteJson, Observation, RecordedNote, Vocabulary};
+use swarmrt_scenario::reference::Schema;
 use swarmrt_scenario::{BehaviourSection, Config, ConfigError, KeyError};
 
 use crate::behaviour::{Act, Behaviour, Params, Series};
@@ -21,6 +23,7 @@ pub use crate::behaviours::{BEHAVIOURS, Note, RadioMsg};
 use crate::consensus::{ConsensusNote, Decision, Leadership, lane};
 use crate::inbox::Heard;
 use crate::overlay::{Headline, LaneChange, Overlay, RoleDef};
+pub use crate::wire::WireTag;
 
 /// Connects a behaviour to its variants of the envelopes (written by `behaviours!`); every
 /// behaviour also has its viewer [`Overlay`].
@@ -44,6 +47,8 @@ pub trait Plugin: Sync {
     fn brain(&self, cfg: &Config, id: u32) -> Result<Box<dyn Brain>, KeyError>;
     /// Every `[behaviour]` key with its default, as `behaviour.<key>`.
     fn keys(&self) -> Vec<String>;
+    /// Its parameters for the config reference (`docs/config.md`): their table and schema.
+    fn reference(&self) -> Schema;
     /// Names of the metrics it computes from the records.
     fn metric_names(&self) -> &'static [&'static str];
     /// Its metrics for a finished run.
@@ -118,6 +123,22 @@ fn parse<B: Behaviour>(params: &toml::Table) -> Result<B::Params, KeyError> {
     )
 }
 
+/// `{ behaviour = params }` parsed with defaults filled in and written again (no bounds
+/// checks), for the config reference.
+fn round_trip<B: Behaviour>(t: &toml::Table) -> Result<toml::Table, KeyError> {
+    let params = t
+        .get("behaviour")
+        .and_then(toml::Value::as_table)
+        .cloned()
+        .unwrap_or_default();
+    let p = parse::<B>(&params)?;
+    let p = toml::Table::try_from(&p).expect("parameters always serialize");
+    Ok(toml::Table::from_iter([(
+        "behaviour".to_string(),
+        toml::Value::Table(p),
+    )]))
+}
+
 impl<B: Enveloped> Plugin for Entry<B> {
     fn kind(&self) -> &'static str {
         B::KIND
@@ -144,6 +165,18 @@ impl<B: Enveloped> Plugin for Entry<B> {
             .keys()
             .map(|k| format!("behaviour.{k}"))
             .collect()
+    }
+
+    fn reference(&self) -> Schema {
+        let defaults =
+            toml::Table::try_from(B::Params::default()).expect("parameters always serialize");
+        Schema {
+            keys: B::Params::KEYS,
+            full: toml::Table::from_iter([("behaviour".to_string(), toml::Value::Table(defaults))]),
+            round_trip: round_trip::<B>,
+            // Only `behaviour` is read; the root is not this schema's.
+            open: &[""],
+        }
     }
 
     fn metric_names(&self) -> &'static [&'static str] {
@@ -272,7 +305,22 @@ pub fn resolve(cfg: &mut Config, file: &str) -> Result<(), ConfigError> {
     Ok(())
 }
 
-/// Loads a config as a robot runs it: [`Config::load`], then [`resolve`].
+/// `B`'s parameters, typed, from a config whose `[behaviour]` is resolved ([`resolve`]);
+/// `Err` at `behaviour.kind` when the config is another behaviour's.
+pub fn params<B: Behaviour>(cfg: &Config) -> Result<B::Params, KeyError> {
+    if cfg.behaviour.kind != B::KIND {
+        return Err((
+            "behaviour.kind".to_string(),
+            format!("expected \"{}\", got \"{}\"", B::KIND, cfg.behaviour.kind),
+        ));
+    }
+    parse::<B>(&cfg.behaviour.params)
+}
+
+/// Reads a config that is already resolved, such as the `config.toml` of a run directory:
+/// [`Config::load`], then [`resolve`]. A user's scenario goes through
+/// `swarmrt_harness::config::load_run_config`, which also builds the map and checks the
+/// robot programs.
 pub fn load(path: &std::path::Path, overrides: &[String]) -> Result<Config, ConfigError> {
     let mut cfg = Config::load(path, overrides)?;
     resolve(&mut cfg, &path.display().to_string())?;
@@ -352,12 +400,14 @@ pub const VOCABULARY: Vocabulary = Vocabulary {
     read_notes,
 };
 
-/// Writes the envelopes, the [`Enveloped`] impls and the list from one line per behaviour.
+/// Writes the envelopes, their wire tags ([`crate::wire`]), the [`Enveloped`] impls and the
+/// list from one line per behaviour.
 macro_rules! behaviours {
-    ($($variant:ident => $module:ident :: $ty:ident),+ $(,)?) => {
+    ($($variant:ident = $tag:literal => $module:ident :: $ty:ident),+ $(,)?) => {
         $(pub mod $module;)+
         /// A message in a radio frame: one variant per behaviour, then the consensus layer's.
-        #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+        /// Encoded with its [`WireTag`] first, then the message.
+        #[derive(Debug, Clone, PartialEq)]
         pub enum RadioMsg {
             $(
                 #[doc = concat!("A message of `", stringify!($module), "`.")]
@@ -368,7 +418,8 @@ macro_rules! behaviours {
         }
 
         /// A note a robot reports: one variant per behaviour, then the consensus layer's.
-        #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+        /// Encoded with its [`WireTag`] first, then the note.
+        #[derive(Debug, Clone, PartialEq)]
         pub enum Note {
             $(
                 #[doc = concat!("A note of `", stringify!($module), "`.")]
@@ -377,6 +428,38 @@ macro_rules! behaviours {
             /// Consensus state changes and log events.
             Consensus($crate::consensus::ConsensusNote),
         }
+
+        /// The wire tag of each variant of [`RadioMsg`] and [`Note`], as declared by its
+        /// registry line: the first byte of its encoding, which adding a behaviour never
+        /// moves. A tag declared twice does not compile (a discriminant assigned twice).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+        #[repr(u8)]
+        pub enum WireTag {
+            $(
+                #[doc = concat!("`RadioMsg::", stringify!($variant), "`.")]
+                $variant = $tag,
+            )+
+            /// `RadioMsg::Consensus` ([`crate::wire::CONSENSUS_TAG`]).
+            Consensus = $crate::wire::CONSENSUS_TAG,
+        }
+
+        impl WireTag {
+            /// Every tag, in registry order (the consensus layer's last).
+            pub const ALL: &[WireTag] = &[$(WireTag::$variant,)+ WireTag::Consensus];
+            /// The variant names, in the order of [`WireTag::ALL`].
+            pub const NAMES: &[&str] = &[$(stringify!($variant),)+ "Consensus"];
+
+            /// The variant's name (`"Goto"`, `"Consensus"`).
+            pub const fn name(self) -> &'static str {
+                match self {
+                    $(WireTag::$variant => stringify!($variant),)+
+                    WireTag::Consensus => "Consensus",
+                }
+            }
+        }
+
+        $crate::wire::envelope_serde!(RadioMsg; $($variant,)+ Consensus);
+        $crate::wire::envelope_serde!(Note; $($variant,)+ Consensus);
 
         impl Note {
             pub(crate) fn behaviour_json(&self) -> serde_json::Result<String> {

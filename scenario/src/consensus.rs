@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::config::Config;
 use crate::error::KeyError;
+use crate::reference::{KEYS, check_u, hi, lo};
 use crate::validate::{check, range_f, range_u64};
 
 /// Which consensus algorithm the robots run.
@@ -114,23 +115,23 @@ pub const MAX_PROPOSALS: usize = 1000;
 impl ConsensusConfig {
     /// Checks the bounds; the error names the key and what was expected.
     pub fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
-        range_u64(
+        check_u(
+            KEYS,
             "consensus.election_timeout_min",
             self.election_timeout_min as u64,
-            2,
-            100_000,
         )?;
+        let max_timeout = hi(KEYS, "consensus.election_timeout_max") as u64;
         range_u64(
             "consensus.election_timeout_max",
             self.election_timeout_max as u64,
             self.election_timeout_min as u64 + 1,
-            1_000_000,
+            max_timeout,
         )
         .map_err(|(k, _)| {
             (
                 k,
                 format!(
-                    "expected an integer above consensus.election_timeout_min = {} and at most 1000000, got {}",
+                    "expected an integer above consensus.election_timeout_min = {} and at most {max_timeout}, got {}",
                     self.election_timeout_min, self.election_timeout_max
                 ),
             )
@@ -149,7 +150,7 @@ impl ConsensusConfig {
         range_u64(
             "consensus.heartbeat_ticks",
             self.heartbeat_ticks as u64,
-            1,
+            lo(KEYS, "consensus.heartbeat_ticks") as u64,
             self.election_timeout_min as u64 - 1,
         )
         .map_err(|(k, _)| {
@@ -162,12 +163,7 @@ impl ConsensusConfig {
                 ),
             )
         })?;
-        range_u64(
-            "consensus.stats_every",
-            self.stats_every as u64,
-            1,
-            1_000_000,
-        )?;
+        check_u(KEYS, "consensus.stats_every", self.stats_every as u64)?;
         check(
             self.propose.len() <= MAX_PROPOSALS,
             "consensus.propose",
@@ -179,7 +175,7 @@ impl ConsensusConfig {
         let b = cfg.map.bounds;
         for (i, p) in self.propose.iter().enumerate() {
             let key = format!("consensus.propose[{i}]");
-            range_u64(&format!("{key}.tick"), p.tick, 0, 100_000_000)?;
+            check_u(KEYS, &format!("{key}.tick"), p.tick)?;
             check(
                 p.goal.is_some() != p.speed.is_some(),
                 &key,
@@ -190,20 +186,19 @@ impl ConsensusConfig {
                 range_f(&format!("{key}.goal[1]"), y, b[1], b[3])?;
             }
             if let Some(s) = p.speed {
-                range_f(&format!("{key}.speed"), s, 0.0, cfg.robots.max_speed)?;
+                let slowest = lo(KEYS, "consensus.propose[i].speed");
+                range_f(&format!("{key}.speed"), s, slowest, cfg.robots.max_speed)?;
             }
         }
-        range_u64(
+        check_u(
+            KEYS,
             "consensus.quadrant.claim_period",
             self.quadrant.claim_period as u64,
-            1,
-            100_000,
         )?;
-        range_u64(
+        check_u(
+            KEYS,
             "consensus.quadrant.decide_tick",
             self.quadrant.decide_tick,
-            1,
-            100_000_000,
         )?;
         Ok(())
     }

@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::reference::{KEYS, hi, lo};
+
 /// The fault schedule.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -171,10 +173,12 @@ impl FaultsConfig {
         for (i, r) in self.restart.iter().enumerate() {
             r.robot
                 .validate(&format!("faults.restart[{i}].robot"), robots)?;
-            if !(1..=1_000_000).contains(&r.down_ticks) {
+            let key = format!("faults.restart[{i}].down_ticks");
+            let (lo, hi) = (lo(KEYS, &key) as u64, hi(KEYS, &key) as u64);
+            if !(lo..=hi).contains(&r.down_ticks) {
                 return Err((
-                    format!("faults.restart[{i}].down_ticks"),
-                    format!("expected a value in [1, 1000000], got {}", r.down_ticks),
+                    key,
+                    format!("expected a value in [{lo}, {hi}], got {}", r.down_ticks),
                 ));
             }
         }
@@ -182,18 +186,24 @@ impl FaultsConfig {
             ("faults.kill_rate", self.kill_rate),
             ("faults.freeze_rate", self.freeze_rate),
         ] {
-            if !(0.0..=1.0).contains(&v) {
+            if !(lo(KEYS, key)..=hi(KEYS, key)).contains(&v) {
                 return Err((
                     key.into(),
-                    format!("expected a probability per robot per tick in [0, 1], got {v}"),
+                    format!(
+                        "expected a probability per robot per tick in [{}, {}], got {v}",
+                        lo(KEYS, key),
+                        hi(KEYS, key)
+                    ),
                 ));
             }
         }
-        if !(1..=1_000_000).contains(&self.freeze_ticks) {
+        let key = "faults.freeze_ticks";
+        let (lo, hi) = (lo(KEYS, key) as u64, hi(KEYS, key) as u64);
+        if !(lo..=hi).contains(&self.freeze_ticks) {
             return Err((
-                "faults.freeze_ticks".into(),
+                key.into(),
                 format!(
-                    "expected a value in [1, 1000000], got {}",
+                    "expected a value in [{lo}, {hi}], got {}",
                     self.freeze_ticks
                 ),
             ));

@@ -34,6 +34,7 @@ pub mod layout;
 pub mod overrides;
 pub mod process;
 pub mod program;
+pub mod reference;
 pub mod rng;
 pub mod validate;
 

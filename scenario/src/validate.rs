@@ -2,9 +2,24 @@
 //! key and what was expected (with the bounds). Behaviours check their own `[behaviour]`
 //! parameters with the same helpers.
 
-use crate::config::{Config, MAX_COORD, MAX_ROBOTS};
+use crate::config::Config;
 use crate::error::KeyError;
-use swarmrt_protocol::{MAX_LIDAR_RAYS, MAX_OUTBOX};
+use crate::reference::{KEYS, check_f, check_u, hi, lo};
+
+/// `v` within the bounds the config reference gives `key` (indices allowed).
+fn f(key: &str, v: f64) -> Result<(), KeyError> {
+    check_f(KEYS, key, v)
+}
+
+/// `v` within `[lower end the config reference gives key, ceiling]`.
+fn below(key: &str, v: f64, ceiling: f64) -> Result<(), KeyError> {
+    range_f(key, v, lo(KEYS, key), ceiling)
+}
+
+/// `v` within the bounds the config reference gives `key`, an integer.
+fn u(key: &str, v: u64) -> Result<(), KeyError> {
+    check_u(KEYS, key, v)
+}
 
 impl Config {
     /// Checks every value against its bounds; the error names the key and the bounds.
@@ -19,19 +34,19 @@ impl Config {
             "scenario.name",
             "letters, digits, '_' or '-' only (it becomes a directory name)",
         )?;
-        range_u64("scenario.ticks", s.ticks, 1, 100_000_000)?;
-        range_f("scenario.dt", s.dt, 1e-4, 10.0)?;
-        range_u64("scenario.deadline_ms", s.deadline_ms, 1, 3_600_000)?;
+        u("scenario.ticks", s.ticks)?;
+        f("scenario.dt", s.dt)?;
+        u("scenario.deadline_ms", s.deadline_ms)?;
         range_u64(
             "scenario.unresponsive_ms",
             s.unresponsive_ms,
             s.deadline_ms,
-            86_400_000,
+            hi(KEYS, "scenario.unresponsive_ms") as u64,
         )?;
 
         let m = &self.map;
         for (i, v) in m.bounds.iter().enumerate() {
-            range_f(&format!("map.bounds[{i}]"), *v, -MAX_COORD, MAX_COORD)?;
+            f(&format!("map.bounds[{i}]"), *v)?;
         }
         check(
             m.bounds[2] > m.bounds[0] && m.bounds[3] > m.bounds[1],
@@ -40,7 +55,7 @@ impl Config {
         )?;
         finite("map.goal.x", m.goal.x)?;
         finite("map.goal.y", m.goal.y)?;
-        range_f("map.goal.radius", m.goal.radius, 1e-3, 1e6)?;
+        f("map.goal.radius", m.goal.radius)?;
         check(
             self.inside_bounds(m.goal.x, m.goal.y, 0.0),
             "map.goal",
@@ -49,9 +64,9 @@ impl Config {
         // Obstacles stay within MAX_COORD like the bounds: a rectangle from -1e308 to 1e308
         // is finite, but its width is not, and the map's BVH panics on it.
         for (i, c) in m.circles.iter().enumerate() {
-            range_f(&format!("map.circles[{i}].x"), c.x, -MAX_COORD, MAX_COORD)?;
-            range_f(&format!("map.circles[{i}].y"), c.y, -MAX_COORD, MAX_COORD)?;
-            range_f(&format!("map.circles[{i}].r"), c.r, 1e-3, 1e6)?;
+            f(&format!("map.circles[{i}].x"), c.x)?;
+            f(&format!("map.circles[{i}].y"), c.y)?;
+            f(&format!("map.circles[{i}].r"), c.r)?;
         }
         for (i, r) in m.rectangles.iter().enumerate() {
             for (k, v) in [
@@ -60,12 +75,7 @@ impl Config {
                 ("x_max", r.x_max),
                 ("y_max", r.y_max),
             ] {
-                range_f(
-                    &format!("map.rectangles[{i}].{k}"),
-                    v,
-                    -MAX_COORD,
-                    MAX_COORD,
-                )?;
+                f(&format!("map.rectangles[{i}].{k}"), v)?;
             }
             check(
                 r.x_max > r.x_min && r.y_max > r.y_min,
@@ -82,18 +92,18 @@ impl Config {
             for (j, pt) in p.points.iter().enumerate() {
                 for (k, v) in pt.iter().enumerate() {
                     let key = format!("map.polygons[{i}].points[{j}][{k}]");
-                    range_f(&key, *v, -MAX_COORD, MAX_COORD)?;
+                    f(&key, *v)?;
                 }
             }
         }
 
         let r = &self.robots;
-        range_u64("robots.count", r.count as u64, 1, MAX_ROBOTS as u64)?;
+        u("robots.count", r.count as u64)?;
         crate::program::validate(self)?;
-        range_u64("ipc.observers", self.ipc.observers as u64, 0, 64)?;
-        range_f("robots.radius", r.radius, 1e-3, 100.0)?;
-        range_f("robots.max_speed", r.max_speed, 0.0, 1000.0)?;
-        range_f("robots.max_turn_rate", r.max_turn_rate, 0.0, 1000.0)?;
+        u("ipc.observers", self.ipc.observers as u64)?;
+        f("robots.radius", r.radius)?;
+        f("robots.max_speed", r.max_speed)?;
+        f("robots.max_turn_rate", r.max_turn_rate)?;
         let st = &r.start;
         check(
             !st.groups.is_empty() || st.group_sizes.is_empty(),
@@ -111,7 +121,7 @@ impl Config {
                             .to_string(),
                     )
                 })?;
-                range_f(key, v, -MAX_COORD, MAX_COORD)?;
+                f(key, v)?;
             }
         } else {
             check(
@@ -140,18 +150,8 @@ impl Config {
                 )?;
             }
             for (i, g) in st.groups.iter().enumerate() {
-                range_f(
-                    &format!("robots.start.groups[{i}].x"),
-                    g.x,
-                    -MAX_COORD,
-                    MAX_COORD,
-                )?;
-                range_f(
-                    &format!("robots.start.groups[{i}].y"),
-                    g.y,
-                    -MAX_COORD,
-                    MAX_COORD,
-                )?;
+                f(&format!("robots.start.groups[{i}].x"), g.x)?;
+                f(&format!("robots.start.groups[{i}].y"), g.y)?;
                 if let Some(h) = g.heading_deg {
                     finite(&format!("robots.start.groups[{i}].heading_deg"), h)?;
                 }
@@ -173,14 +173,10 @@ impl Config {
                 short(st.jitter)
             ),
         )?;
-        range_f("robots.start.scatter", st.scatter, 0.0, MAX_COORD)?;
-        range_f(
-            "robots.start.heading_jitter_deg",
-            st.heading_jitter_deg,
-            0.0,
-            180.0,
-        )?;
-        range_f("robots.start.spacing", r.start.spacing, 2.0 * r.radius + 1e-6, 1e6)
+        f("robots.start.scatter", st.scatter)?;
+        f("robots.start.heading_jitter_deg", st.heading_jitter_deg)?;
+        let max_spacing = hi(KEYS, "robots.start.spacing");
+        range_f("robots.start.spacing", r.start.spacing, 2.0 * r.radius + 1e-6, max_spacing)
             .map_err(|(k, _)| {
                 (
                     k,
@@ -192,13 +188,8 @@ impl Config {
                 )
             })?;
         finite("robots.start.heading_deg", r.start.heading_deg)?;
-        range_u64(
-            "robots.lidar.rays",
-            r.lidar.rays as u64,
-            1,
-            MAX_LIDAR_RAYS as u64,
-        )?;
-        range_f("robots.lidar.fov_deg", r.lidar.fov_deg, 0.0, 360.0)?;
+        u("robots.lidar.rays", r.lidar.rays as u64)?;
+        f("robots.lidar.fov_deg", r.lidar.fov_deg)?;
         if !r.lidar.angles_deg.is_empty() {
             check(
                 r.lidar.rays as usize == r.lidar.angles_deg.len(),
@@ -210,38 +201,28 @@ impl Config {
                 ),
             )?;
             for (k, a) in r.lidar.angles_deg.iter().enumerate() {
-                range_f(&format!("robots.lidar.angles_deg[{k}]"), *a, -360.0, 360.0)?;
+                f(&format!("robots.lidar.angles_deg[{k}]"), *a)?;
             }
         }
-        range_f("robots.lidar.range", r.lidar.range, 1e-3, 1e6)?;
-        range_f(
-            "robots.range_bearing.range",
-            r.range_bearing.range,
-            0.0,
-            1e6,
-        )?;
-        range_f("robots.goal_sensor.range", r.goal_sensor.range, 0.0, 1e9)?;
-        range_f(
-            "robots.goal_sensor.fov_deg",
-            r.goal_sensor.fov_deg,
-            0.0,
-            360.0,
-        )?;
-        range_f("robots.noise.pose", r.noise.pose, 0.0, 100.0)?;
-        range_f("robots.noise.heading", r.noise.heading, 0.0, 10.0)?;
-        range_f("robots.noise.lidar", r.noise.lidar, 0.0, 100.0)?;
-        range_f("robots.noise.wheel_slip", r.noise.wheel_slip, 0.0, 1.0)?;
+        f("robots.lidar.range", r.lidar.range)?;
+        f("robots.range_bearing.range", r.range_bearing.range)?;
+        f("robots.goal_sensor.range", r.goal_sensor.range)?;
+        f("robots.goal_sensor.fov_deg", r.goal_sensor.fov_deg)?;
+        f("robots.noise.pose", r.noise.pose)?;
+        f("robots.noise.heading", r.noise.heading)?;
+        f("robots.noise.lidar", r.noise.lidar)?;
+        f("robots.noise.wheel_slip", r.noise.wheel_slip)?;
 
         let q = &self.radio;
-        range_f("radio.range", q.range, 0.0, 1e9)?;
-        range_f("radio.loss", q.loss, 0.0, 1.0)?;
-        range_f("radio.ge_p", q.ge_p, 0.0, 1.0)?;
-        range_f("radio.ge_r", q.ge_r, 0.0, 1.0)?;
-        range_f("radio.ge_loss_good", q.ge_loss_good, 0.0, 1.0)?;
-        range_f("radio.ge_loss_bad", q.ge_loss_bad, 0.0, 1.0)?;
-        range_u64("radio.delay_ticks", q.delay_ticks as u64, 0, 10_000)?;
-        range_u64("radio.jitter_ticks", q.jitter_ticks as u64, 0, 10_000)?;
-        range_u64("radio.capacity", q.capacity as u64, 1, MAX_OUTBOX as u64)?;
+        f("radio.range", q.range)?;
+        f("radio.loss", q.loss)?;
+        f("radio.ge_p", q.ge_p)?;
+        f("radio.ge_r", q.ge_r)?;
+        f("radio.ge_loss_good", q.ge_loss_good)?;
+        f("radio.ge_loss_bad", q.ge_loss_bad)?;
+        u("radio.delay_ticks", q.delay_ticks as u64)?;
+        u("radio.jitter_ticks", q.jitter_ticks as u64)?;
+        u("radio.capacity", q.capacity as u64)?;
 
         self.validate_heights()?;
         self.faults.validate(self.robots.count)?;
@@ -319,12 +300,12 @@ impl Config {
         for (kind, h) in heights {
             let i = index.entry(kind).or_default();
             if let Some(h) = h {
-                range_f(&format!("map.{kind}[{i}].height"), h, 1e-3, 1e6)?;
+                f(&format!("map.{kind}[{i}].height"), h)?;
             }
             *i += 1;
         }
         if let Some(h) = m.height {
-            range_f("map.height", h, 1e-3, 1e6)?;
+            f("map.height", h)?;
         }
         let Some(aerial) = &self.robots.aerial else {
             return Ok(());
@@ -335,22 +316,20 @@ impl Config {
                 "a ceiling in metres (required with [robots.aerial])".to_string(),
             )
         })?;
-        range_f(
+        f(
             "robots.aerial.max_vertical_speed",
             aerial.max_vertical_speed,
-            0.0,
-            1000.0,
         )?;
-        range_f("robots.aerial.start_z", aerial.start_z, 0.0, ceiling)?;
+        below("robots.aerial.start_z", aerial.start_z, ceiling)?;
         if let Some(z) = m.goal.z {
-            range_f("map.goal.z", z, 0.0, ceiling)?;
+            below("map.goal.z", z, ceiling)?;
         }
         for (i, g) in self.robots.start.groups.iter().enumerate() {
             if let Some(z) = g.z {
-                range_f(&format!("robots.start.groups[{i}].z"), z, 0.0, ceiling)?;
+                below(&format!("robots.start.groups[{i}].z"), z, ceiling)?;
             }
             if let Some(z) = g.goal_z {
-                range_f(&format!("robots.start.groups[{i}].goal_z"), z, 0.0, ceiling)?;
+                below(&format!("robots.start.groups[{i}].goal_z"), z, ceiling)?;
             }
         }
         Ok(())

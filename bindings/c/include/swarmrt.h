@@ -30,7 +30,7 @@
  *   swarmrt_robot_close(r);              // removes this robot's ports and node
  *   return swarmrt_exit_code(rc);        // 0 only when the world ended the run; 143 SIGTERM
  *
- * What the library does for you, as the Rust robot does (agent/src/shell.rs): it drains every
+ * What the library does for you, as the Rust robot does (runtime/src/robot/shell.rs): it drains every
  * queued sample per wake-up, checks the protocol version, reads this robot's slot
  * (robot - SWARMRT_SLOT_OFFSET), returns only ticks to answer (state ACTIVE or DOWN: a DOWN
  * robot answers and the world ignores the command), treats an interrupted wait (EINTR after
@@ -47,6 +47,7 @@
 #include <stdint.h>
 
 #include "swarmrt_messages.h"
+#include "swarmrt_tags.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -134,8 +135,8 @@ int swarmrt_command_push_opaque(swarmrt_command_t *cmd, uint32_t dst, const uint
                                 size_t len);
 
 /* Queues the go-to behaviour's pose beacon for dst: the bytes the Rust go-to robot sends
- * (postcard RadioMsg::Goto(Beacon { x, y, theta }): byte 0x00, then x, y, theta as
- * little-endian doubles). SWARMRT_OK, SWARMRT_ERR_OUTBOX_FULL or SWARMRT_ERR_NULL. */
+ * (postcard RadioMsg::Goto(Beacon { x, y, theta }): byte SWARMRT_TAG_GOTO, then x, y,
+ * theta as little-endian doubles). SWARMRT_OK, SWARMRT_ERR_OUTBOX_FULL or SWARMRT_ERR_NULL. */
 int swarmrt_command_push_goto_beacon(swarmrt_command_t *cmd, uint32_t dst, double x, double y,
                                      double theta);
 

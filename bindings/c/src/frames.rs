@@ -4,9 +4,9 @@
 
 use swarmrt_protocol::{Command, Frame, MAX_OUTBOX, PushError};
 
-/// First payload byte of a go-to beacon: the postcard tag of `RadioMsg::Goto`, the first
-/// behaviour in `agent/src/behaviours/mod.rs` (checked against the Rust robot's encoding in
-/// this module's tests).
+/// First payload byte of a go-to beacon: the wire tag of `RadioMsg::Goto`, declared in
+/// `agent/src/behaviours/mod.rs` (`SWARMRT_TAG_GOTO` of `swarmrt_tags.h`; checked against the
+/// registry and the Rust robot's encoding in this module's tests).
 pub const GOTO_TAG: u8 = 0;
 /// Bytes of a go-to beacon: the tag, then `x`, `y`, `theta` as little-endian f64 (postcard's
 /// encoding of `RadioMsg::Goto(Beacon { x, y, theta })`).
@@ -69,6 +69,7 @@ mod tests {
 
     #[test]
     fn a_beacon_is_the_rust_robots_bytes() {
+        assert_eq!(GOTO_TAG, swarmrt_agent::wire::WireTag::Goto as u8);
         let (x, y, theta) = (1.25, -3.5e-7, std::f64::consts::PI);
         let mut rust = Command::act(2, 7);
         rust.push_frame(BROADCAST, &RadioMsg::Goto(Beacon { x, y, theta }))

@@ -82,7 +82,7 @@ static int messages(void) {
     const swarmrt_frame_t *f = &cmd.outbox[0];
     double x = 1.5, got;
     CHECK(cmd.outbox_len == 1 && f->dst == SWARMRT_BROADCAST && f->len == 25);
-    CHECK(f->payload[0] == 0);
+    CHECK(f->payload[0] == SWARMRT_TAG_GOTO);
     memcpy(&got, &f->payload[1], 8); /* little-endian, as on every supported target */
     CHECK(got == x);
     double bx, by, bt;

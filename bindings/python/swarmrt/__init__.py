@@ -4,7 +4,9 @@
   protocol constant, GENERATED from protocol/src/layout.rs, so the layout cannot drift.
 * `swarmrt.robot`: `Robot.from_env()` joins the run the orchestrator started this process
   for; `Robot.observations()` yields the ticks to answer; `Robot.send()` answers.
-* `swarmrt.radio`: postcard encoding of the Rust robots' radio messages, and opaque frames.
+* `swarmrt.radio`: postcard encoding of the Rust robots' radio messages, and opaque frames;
+  its wire tags (`radio.GOTO`, ..., `radio.CONSENSUS`) come from `swarmrt._tags`, GENERATED
+  from the agent's behaviour registry (agent/src/wire.rs), so they cannot drift either.
 
 See bindings/python/README.md and examples/python/.
 """

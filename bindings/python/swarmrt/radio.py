@@ -1,15 +1,17 @@
 """Radio payloads as the Rust robots write them: postcard, by hand.
 
 A frame's payload is either a postcard-encoded `RadioMsg` (agent/src/behaviours/mod.rs: one
-variant per behaviour in list order, then the consensus layer's) or an *opaque* frame, whose
+variant per behaviour, then the consensus layer's; its first byte is the variant's fixed wire
+tag, `GOTO`, ..., `CONSENSUS`, from the generated `_tags.py`) or an *opaque* frame, whose
 first byte is `OPAQUE_TAG` and whose rest is raw bytes for robots of one kind. The world
 refuses a command carrying a frame that is neither (it counts it in `rejected`), so a Python
 robot that talks to Rust robots must write exactly the bytes postcard writes; the helpers here
 do, for the messages the example robots use.
 
 Postcard in four lines (https://postcard.jamesmunns.com/wire-format): an enum is its variant
-index as a varint, then the variant's fields in order; `u8` is one byte; `u16`/`u32`/`u64`
-are LEB128 varints; `f32`/`f64` are 4/8 bytes little-endian; a struct is its fields in order.
+index as a varint (for `RadioMsg`, its wire tag: one byte, as every tag is below 128), then
+the variant's fields in order; `u8` is one byte; `u16`/`u32`/`u64` are LEB128 varints;
+`f32`/`f64` are 4/8 bytes little-endian; a struct is its fields in order.
 No lengths, no names: a decoder has to know the type, which is why each message has its own
 function here. Decoding follows postcard's `from_bytes`: trailing bytes are ignored.
 """
@@ -24,15 +26,19 @@ from typing import NamedTuple, Optional
 from ._messages import BROADCAST, MAX_OUTBOX, MAX_PAYLOAD, OPAQUE_TAG, Command, Frame
 from .scenario import round_half_away
 
-# `RadioMsg` variant indices: the order of the `behaviours!` list in
-# agent/src/behaviours/mod.rs, then `Consensus`. The index is the payload's first byte.
-GOTO = 0
-FORMATION = 1
-FLOCKING = 2
-GROUPING = 3
-PLANNER = 4
-CHAIN = 5
-CONSENSUS = 6
+# `RadioMsg` wire tags, the payload's first byte: declared on each line of the `behaviours!`
+# list in agent/src/behaviours/mod.rs and generated into `_tags.py`, never written here by
+# hand, so a behaviour added in Rust cannot move them. Re-exported as `radio.GOTO`, ...
+from ._tags import (  # noqa: F401 (re-exported)
+    CHAIN,
+    CONSENSUS,
+    FLOCKING,
+    FORMATION,
+    GOTO,
+    GROUPING,
+    PLANNER,
+    TAGS,
+)
 
 # `FlockMsg` variant indices (agent/src/behaviours/flocking/messages.rs).
 FLOCK_HEADING = 0

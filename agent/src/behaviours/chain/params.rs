@@ -4,6 +4,7 @@
 //! lasts, how a head re-plans).
 
 use serde::{Deserialize, Serialize};
+use swarmrt_scenario::reference::{Bounds, Key, Lim, check_f, check_u, hi, k, lo, r};
 use swarmrt_scenario::validate::{check, range_f, range_u64, short};
 use swarmrt_scenario::{Config, KeyError};
 
@@ -113,58 +114,120 @@ impl Default for ChainParams {
     }
 }
 
+const BELOW_COUNT: Bounds = Bounds::Range(Lim::V(0.0), Lim::Of("robots.count - 1"));
+
 impl Params for ChainParams {
+    #[rustfmt::skip]
+    const KEYS: &'static [Key] = &[
+        k("behaviour.rod_min", Bounds::Range(Lim::Of("2 * robots.radius"), Lim::V(1e3)), "m", "Rod MinLength (Table 1): closer than this, the master pushes its slave."),
+        k("behaviour.rod_max", Bounds::Range(Lim::Of("rod_min"), Lim::V(1e3)), "m", "Rod MaxLength: farther than this, the master pulls its slave."),
+        k("behaviour.angle_min_deg", r(0.0, 180.0), "deg", "Connector MinAngle: the angle at a robot between its chain neighbours (180 = straight)."),
+        k("behaviour.angle_max_deg", Bounds::Range(Lim::Of("angle_min_deg"), Lim::V(180.0)), "deg", "Connector MaxAngle."),
+        k("behaviour.rod_tolerance", r(0.0, 1e3), "m", "How far a rod may be outside its limits before `chain.rod_violations` counts it."),
+        k("behaviour.angle_tolerance_deg", r(0.0, 180.0), "deg", "How far a connector may be outside its limits before `chain.angle_violations` counts it."),
+        k("behaviour.initiator", BELOW_COUNT, "", "The robot that initiates the motion; the chain is two sub-chains headed by it."),
+        k("behaviour.stationary", BELOW_COUNT, "", "Fixed robots: they never move and veto any relocation.").also("not the initiator").ty("array of integer"),
+        k("behaviour.speed", Bounds::Range(Lim::V(0.0), Lim::Of("robots.max_speed")), "m/s", "s of Table 2: the initiator's wheel speed (the others may use `robots.max_speed`)."),
+        k("behaviour.axle", r(1e-4, 100.0), "m", "Axle length, turning Table 2's wheel speeds into a turn rate."),
+        k("behaviour.wall_min", r(0.0, 1e3), "m", "Minimum wall distance of the wall following (the paper: 0.7)."),
+        k("behaviour.wall_max", Bounds::Range(Lim::Of("wall_min"), Lim::V(1e3)), "m", "Maximum wall distance (the paper: 0.9)."),
+        k("behaviour.side_sector_deg", r(0.0, 180.0), "deg", "`[from, to]` off the heading: the left-front sector (right-front: `[-to, -from]`).").also("from <= to"),
+        k("behaviour.target_gain", r(0.0, 1e3), "1/rad", "Gain of TARGET-CHECK's turn towards the target."),
+        k("behaviour.stop_at_target", Bounds::Any, "", "The initiator stops at the target; false: it passes through so the whole chain threads it."),
+        k("behaviour.replan_turn_deg", r(0.0, 360.0), "deg", "The initiator's turn in place after a veto, towards the side with more room."),
+        k("behaviour.master_from", Bounds::Any, "", "Where a slave learns its master's position: range-and-bearing, radio, or both."),
+        k("behaviour.trail", r(1.0, 10_000.0), "", "Master positions a slave remembers (for Push-Pull-Rotate)."),
+        k("behaviour.line_clearance", r(0.0, 1e3), "m", "Clearance beyond `robots.radius` a guiding line needs from any lidar hit."),
+        k("behaviour.trapped_ticks", r(1.0, 1_000_000.0), "ticks", "Ticks a slave may find no clear guiding line before it vetoes."),
+        k("behaviour.veto_hold", r(1.0, 1_000_000.0), "ticks", "Ticks a heard veto keeps holding (rides over lost frames)."),
+        k("behaviour.turn_gain", r(0.0, 1e3), "1/s", "Turn gain of a robot steering to its target point (rad/s per radian)."),
+    ];
+
     fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
+        let keys = Self::KEYS;
+        let (low, high) = (|key| lo(keys, key), |key| hi(keys, key));
         let r = &cfg.robots;
-        range_f("behaviour.rod_min", self.rod_min, 2.0 * r.radius, 1e3).map_err(|(k, _)| {
+        let max_rod = high("behaviour.rod_min");
+        range_f("behaviour.rod_min", self.rod_min, 2.0 * r.radius, max_rod).map_err(|(k, _)| {
             (
                 k,
                 format!(
-                    "a length in [2 * robots.radius = {}, 1000] so neighbours never touch, got {}",
+                    "a length in [2 * robots.radius = {}, {}] so neighbours never touch, got {}",
                     short(2.0 * r.radius),
+                    short(max_rod),
                     short(self.rod_min)
                 ),
             )
         })?;
-        range_f("behaviour.rod_max", self.rod_max, self.rod_min, 1e3)?;
-        range_f("behaviour.angle_min_deg", self.angle_min_deg, 0.0, 180.0)?;
+        range_f(
+            "behaviour.rod_max",
+            self.rod_max,
+            self.rod_min,
+            high("behaviour.rod_max"),
+        )?;
+        check_f(keys, "behaviour.angle_min_deg", self.angle_min_deg)?;
         range_f(
             "behaviour.angle_max_deg",
             self.angle_max_deg,
             self.angle_min_deg,
-            180.0,
+            high("behaviour.angle_max_deg"),
         )?;
-        range_f("behaviour.rod_tolerance", self.rod_tolerance, 0.0, 1e3)?;
-        range_f(
+        check_f(keys, "behaviour.rod_tolerance", self.rod_tolerance)?;
+        check_f(
+            keys,
             "behaviour.angle_tolerance_deg",
             self.angle_tolerance_deg,
-            0.0,
-            180.0,
         )?;
         let n = r.count.max(1);
-        range_u64("behaviour.initiator", self.initiator as u64, 0, n as u64 - 1)?;
+        let first = low("behaviour.initiator") as u64;
+        range_u64(
+            "behaviour.initiator",
+            self.initiator as u64,
+            first,
+            n as u64 - 1,
+        )?;
         for (k, &s) in self.stationary.iter().enumerate() {
-            range_u64(&format!("behaviour.stationary[{k}]"), s as u64, 0, n as u64 - 1)?;
+            range_u64(
+                &format!("behaviour.stationary[{k}]"),
+                s as u64,
+                first,
+                n as u64 - 1,
+            )?;
             check(
                 s != self.initiator,
                 &format!("behaviour.stationary[{k}]"),
                 "a robot other than behaviour.initiator (the initiator moves)",
             )?;
         }
-        range_f("behaviour.speed", self.speed, 0.0, r.max_speed)?;
-        range_f("behaviour.axle", self.axle, 1e-4, 100.0)?;
-        range_f("behaviour.wall_min", self.wall_min, 0.0, 1e3)?;
-        range_f("behaviour.wall_max", self.wall_max, self.wall_min, 1e3)?;
+        range_f(
+            "behaviour.speed",
+            self.speed,
+            low("behaviour.speed"),
+            r.max_speed,
+        )?;
+        check_f(keys, "behaviour.axle", self.axle)?;
+        check_f(keys, "behaviour.wall_min", self.wall_min)?;
+        range_f(
+            "behaviour.wall_max",
+            self.wall_max,
+            self.wall_min,
+            high("behaviour.wall_max"),
+        )?;
         let [from, to] = self.side_sector_deg;
-        range_f("behaviour.side_sector_deg[0]", from, 0.0, 180.0)?;
-        range_f("behaviour.side_sector_deg[1]", to, from, 180.0)?;
-        range_f("behaviour.target_gain", self.target_gain, 0.0, 1e3)?;
-        range_f("behaviour.replan_turn_deg", self.replan_turn_deg, 0.0, 360.0)?;
-        range_u64("behaviour.trail", self.trail as u64, 1, 10_000)?;
-        range_f("behaviour.line_clearance", self.line_clearance, 0.0, 1e3)?;
-        range_u64("behaviour.trapped_ticks", self.trapped_ticks as u64, 1, 1_000_000)?;
-        range_u64("behaviour.veto_hold", self.veto_hold as u64, 1, 1_000_000)?;
-        range_f("behaviour.turn_gain", self.turn_gain, 0.0, 1e3)?;
+        check_f(keys, "behaviour.side_sector_deg[0]", from)?;
+        range_f(
+            "behaviour.side_sector_deg[1]",
+            to,
+            from,
+            high("behaviour.side_sector_deg"),
+        )?;
+        check_f(keys, "behaviour.target_gain", self.target_gain)?;
+        check_f(keys, "behaviour.replan_turn_deg", self.replan_turn_deg)?;
+        check_u(keys, "behaviour.trail", self.trail as u64)?;
+        check_f(keys, "behaviour.line_clearance", self.line_clearance)?;
+        check_u(keys, "behaviour.trapped_ticks", self.trapped_ticks as u64)?;
+        check_u(keys, "behaviour.veto_hold", self.veto_hold as u64)?;
+        check_f(keys, "behaviour.turn_gain", self.turn_gain)?;
         Ok(())
     }
 }

@@ -1,7 +1,8 @@
 //! `[behaviour]` of `kind = "flocking"`: the weights of eq. 1-11 and the e-puck's numbers.
 
 use serde::{Deserialize, Serialize};
-use swarmrt_scenario::validate::{check, range_f};
+use swarmrt_scenario::reference::{Bounds, Key, check_f, k, r};
+use swarmrt_scenario::validate::check;
 use swarmrt_scenario::{Config, KeyError};
 
 use crate::behaviour::Params;
@@ -96,15 +97,35 @@ impl Default for FlockingParams {
 pub const BYTE_MAX_ROBOTS: u32 = 8;
 
 impl Params for FlockingParams {
+    #[rustfmt::skip]
+    const KEYS: &'static [Key] = &[
+        k("behaviour.alpha", r(0.0, 1e3), "", "alpha: weight of the heading alignment h (eq. 1)."),
+        k("behaviour.beta", r(0.0, 1e3), "", "beta: base of the proximal weight Gamma = beta^(iota + s) (eq. 2)."),
+        k("behaviour.delta", r(0.0, 1e3), "", "delta: base of the cohesion weight Delta = delta^(zeta + d) (eq. 3)."),
+        k("behaviour.iota", r(-10.0, 10.0), "", "iota: bias of the proximal exponent (eq. 2)."),
+        k("behaviour.zeta", r(-10.0, 10.0), "", "zeta: bias of the cohesion exponent, d in metres (eq. 3)."),
+        k("behaviour.kappa", r(0.0, 1e3), "", "kappa: turn gain (eq. 11)."),
+        k("behaviour.mb", r(0.0, 1.0), "", "M_b: migratory bias (eq. 5)."),
+        k("behaviour.desired_distance", r(0.0, 1e3), "m", "D: desired distance to the flock's centre of mass (eq. 3)."),
+        k("behaviour.migration_deg", r(-360.0, 360.0), "deg", "Migration direction per flock (flock k = start group k); one value for all.").also("one value, or one per start group"),
+        k("behaviour.time_out", r(0.0, 1e6), "s", "A flock-mate not heard from this long is forgotten."),
+        k("behaviour.heading", Bounds::Any, "", "Heading source: the compass sensor, or odometry (drifts with wheel slip)."),
+        k("behaviour.encoding", Bounds::Any, "", "Radio encoding: a float heading, or one byte (3-bit id, 5-bit heading).").also("`\"byte\"`: at most 8 robots, one flock"),
+        k("behaviour.wheel_radius", r(1e-4, 10.0), "m", "W_r: wheel radius (e-puck: 0.0205)."),
+        k("behaviour.axle", r(1e-4, 10.0), "m", "l: axle length (e-puck: 0.052)."),
+        k("behaviour.performance_speed", r(1e-6, 1e3), "m/s", "v_max of eq. 16: the speed the metric v' is normalised by."),
+    ];
+
     fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
-        range_f("behaviour.alpha", self.alpha, 0.0, 1e3)?;
-        range_f("behaviour.beta", self.beta, 0.0, 1e3)?;
-        range_f("behaviour.delta", self.delta, 0.0, 1e3)?;
-        range_f("behaviour.iota", self.iota, -10.0, 10.0)?;
-        range_f("behaviour.zeta", self.zeta, -10.0, 10.0)?;
-        range_f("behaviour.kappa", self.kappa, 0.0, 1e3)?;
-        range_f("behaviour.mb", self.mb, 0.0, 1.0)?;
-        range_f("behaviour.desired_distance", self.desired_distance, 0.0, 1e3)?;
+        let keys = Self::KEYS;
+        check_f(keys, "behaviour.alpha", self.alpha)?;
+        check_f(keys, "behaviour.beta", self.beta)?;
+        check_f(keys, "behaviour.delta", self.delta)?;
+        check_f(keys, "behaviour.iota", self.iota)?;
+        check_f(keys, "behaviour.zeta", self.zeta)?;
+        check_f(keys, "behaviour.kappa", self.kappa)?;
+        check_f(keys, "behaviour.mb", self.mb)?;
+        check_f(keys, "behaviour.desired_distance", self.desired_distance)?;
         let flocks = cfg.start_group_count();
         check(
             self.migration_deg.len() == 1 || self.migration_deg.len() == flocks,
@@ -115,17 +136,12 @@ impl Params for FlockingParams {
             ),
         )?;
         for (k, m) in self.migration_deg.iter().enumerate() {
-            range_f(&format!("behaviour.migration_deg[{k}]"), *m, -360.0, 360.0)?;
+            check_f(keys, &format!("behaviour.migration_deg[{k}]"), *m)?;
         }
-        range_f("behaviour.time_out", self.time_out, 0.0, 1e6)?;
-        range_f("behaviour.wheel_radius", self.wheel_radius, 1e-4, 10.0)?;
-        range_f("behaviour.axle", self.axle, 1e-4, 10.0)?;
-        range_f(
-            "behaviour.performance_speed",
-            self.performance_speed,
-            1e-6,
-            1e3,
-        )?;
+        check_f(keys, "behaviour.time_out", self.time_out)?;
+        check_f(keys, "behaviour.wheel_radius", self.wheel_radius)?;
+        check_f(keys, "behaviour.axle", self.axle)?;
+        check_f(keys, "behaviour.performance_speed", self.performance_speed)?;
         if self.encoding == Encoding::Byte {
             check(
                 cfg.robots.count <= BYTE_MAX_ROBOTS,

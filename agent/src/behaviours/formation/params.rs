@@ -1,7 +1,8 @@
 //! `[behaviour]` of `kind = "formation"` (seed 000).
 
 use serde::{Deserialize, Serialize};
-use swarmrt_scenario::validate::{range_f, range_u64};
+use swarmrt_scenario::reference::{Bounds, Key, Lim, check_f, check_u, k, lo, r};
+use swarmrt_scenario::validate::range_f;
 use swarmrt_scenario::{Config, KeyError};
 
 use crate::behaviour::Params;
@@ -51,42 +52,43 @@ impl Default for FormationParams {
 }
 
 impl Params for FormationParams {
+    #[rustfmt::skip]
+    const KEYS: &'static [Key] = &[
+        k("behaviour.speed", Bounds::Range(Lim::V(0.0), Lim::Of("robots.max_speed")), "m/s", "Constant linear speed v (section 4.1: only the heading changes)."),
+        k("behaviour.turn_deg", Bounds::Range(Lim::V(0.0), Lim::Of("min(robots.max_turn_rate * scenario.dt, 180 deg)")), "deg", "Turn angle w per step (the paper: 1, 5, 10, 20)."),
+        k("behaviour.detect_range", r(0.0, 1e6), "m", "An observer reports an obstacle when a ray of its cone hits closer than this."),
+        k("behaviour.cone_deg", r(0.0, 180.0), "deg", "Half-width of each observer's lidar cone."),
+        k("behaviour.side_offset_deg", r(-90.0, 90.0), "deg", "How far the side observers' cones point outward."),
+        k("behaviour.epsilon_obstacle", r(0.0, 1.0), "", "Epsilon-greedy probability of the opposite turn when an obstacle is seen."),
+        k("behaviour.epsilon_clear", r(0.0, 1.0), "", "Epsilon-greedy probability of the opposite turn when nothing is seen."),
+        k("behaviour.lookahead", r(0.0, 1e6), "m", "How far ahead of its slot, along the swarm heading, a robot steers."),
+        k("behaviour.stale_ticks", r(1.0, 1_000_000.0), "ticks", "A neighbour silent this long is left out of the virtual leader."),
+        k("behaviour.verdict_ticks", r(1.0, 1_000_000.0), "ticks", "An observer's lidar verdict counts this long after it was sent."),
+    ];
+
     fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
-        range_f("behaviour.speed", self.speed, 0.0, cfg.robots.max_speed)?;
+        let keys = Self::KEYS;
+        let low = |key| lo(keys, key);
+        range_f(
+            "behaviour.speed",
+            self.speed,
+            low("behaviour.speed"),
+            cfg.robots.max_speed,
+        )?;
         let max_turn = (cfg.robots.max_turn_rate * cfg.scenario.dt).to_degrees();
         range_f(
             "behaviour.turn_deg",
             self.turn_deg,
-            0.0,
+            low("behaviour.turn_deg"),
             max_turn.min(180.0),
         )?;
-        range_f("behaviour.detect_range", self.detect_range, 0.0, 1e6)?;
-        range_f("behaviour.cone_deg", self.cone_deg, 0.0, 180.0)?;
-        range_f(
-            "behaviour.side_offset_deg",
-            self.side_offset_deg,
-            -90.0,
-            90.0,
-        )?;
-        range_f(
-            "behaviour.epsilon_obstacle",
-            self.epsilon_obstacle,
-            0.0,
-            1.0,
-        )?;
-        range_f("behaviour.epsilon_clear", self.epsilon_clear, 0.0, 1.0)?;
-        range_f("behaviour.lookahead", self.lookahead, 0.0, 1e6)?;
-        range_u64(
-            "behaviour.stale_ticks",
-            self.stale_ticks as u64,
-            1,
-            1_000_000,
-        )?;
-        range_u64(
-            "behaviour.verdict_ticks",
-            self.verdict_ticks as u64,
-            1,
-            1_000_000,
-        )
+        check_f(keys, "behaviour.detect_range", self.detect_range)?;
+        check_f(keys, "behaviour.cone_deg", self.cone_deg)?;
+        check_f(keys, "behaviour.side_offset_deg", self.side_offset_deg)?;
+        check_f(keys, "behaviour.epsilon_obstacle", self.epsilon_obstacle)?;
+        check_f(keys, "behaviour.epsilon_clear", self.epsilon_clear)?;
+        check_f(keys, "behaviour.lookahead", self.lookahead)?;
+        check_u(keys, "behaviour.stale_ticks", self.stale_ticks as u64)?;
+        check_u(keys, "behaviour.verdict_ticks", self.verdict_ticks as u64)
     }
 }

@@ -1,7 +1,7 @@
 //! `[behaviour]` of `kind = "goto"`.
 
 use serde::{Deserialize, Serialize};
-use swarmrt_scenario::validate::{range_f, range_u64};
+use swarmrt_scenario::reference::{Key, check_f, check_u, k, r};
 use swarmrt_scenario::{Config, KeyError};
 
 use crate::behaviour::Params;
@@ -32,15 +32,19 @@ impl Default for GotoParams {
 }
 
 impl Params for GotoParams {
+    #[rustfmt::skip]
+    const KEYS: &'static [Key] = &[
+        k("behaviour.speed", r(0.0, 1000.0), "m/s", "Cruise speed."),
+        k("behaviour.avoid_distance", r(0.0, 1e6), "m", "Obstacles closer than this (from the robot centre) make the robot turn away."),
+        k("behaviour.beacon_period", r(0.0, 1_000_000.0), "ticks", "Ticks between pose beacons (0: none)."),
+        k("behaviour.slot_spacing", r(0.0, 1e6), "m", "Distance between the goal slots robots spread into around the goal centre."),
+    ];
+
     fn validate(&self, _cfg: &Config) -> Result<(), KeyError> {
-        range_f("behaviour.speed", self.speed, 0.0, 1000.0)?;
-        range_f("behaviour.avoid_distance", self.avoid_distance, 0.0, 1e6)?;
-        range_u64(
-            "behaviour.beacon_period",
-            self.beacon_period as u64,
-            0,
-            1_000_000,
-        )?;
-        range_f("behaviour.slot_spacing", self.slot_spacing, 0.0, 1e6)
+        let keys = Self::KEYS;
+        check_f(keys, "behaviour.speed", self.speed)?;
+        check_f(keys, "behaviour.avoid_distance", self.avoid_distance)?;
+        check_u(keys, "behaviour.beacon_period", self.beacon_period as u64)?;
+        check_f(keys, "behaviour.slot_spacing", self.slot_spacing)
     }
 }

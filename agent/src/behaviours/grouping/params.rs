@@ -1,7 +1,8 @@
 //! `[behaviour]` of `kind = "grouping"`: the timings, forces and sizes of seed 001.
 
 use serde::{Deserialize, Serialize};
-use swarmrt_scenario::validate::{check, range_f, range_u64};
+use swarmrt_scenario::reference::{Bounds, Key, Lim, check_f, check_u, hi, k, lo, r};
+use swarmrt_scenario::validate::{check, range_f};
 use swarmrt_scenario::{Config, KeyError};
 
 use crate::behaviour::Params;
@@ -90,28 +91,68 @@ impl Default for GroupingParams {
 }
 
 impl Params for GroupingParams {
+    #[rustfmt::skip]
+    const KEYS: &'static [Key] = &[
+        k("behaviour.grouping_time", r(0.0, 1e5), "s", "Grouping time limit."),
+        k("behaviour.cluster_distance", Bounds::Range(Lim::Of("2 * robots.radius"), Lim::V(1e3)), "m", "A robot whose closest neighbour is nearer has finished clustering."),
+        k("behaviour.gravity", r(0.0, 1e6), "", "G of eq. 3 (robots have unit mass)."),
+        k("behaviour.force_cap", r(1e-6, 1e6), "", "Largest force one neighbour may exert (eq. 3, capped)."),
+        k("behaviour.sense", Bounds::Any, "", "What the grouping force senses robots with: the range finder and its shape classifier, or range-and-bearing.").also("`\"lidar\"` needs 8+ lidar rays"),
+        k("behaviour.decide_time", r(0.0, 1e5), "s", "Time after grouping during which robots stand still and choose leaders."),
+        k("behaviour.claim_period", r(1.0, 10_000.0), "ticks", "Ticks between a robot's leader claims."),
+        k("behaviour.radius", Bounds::Range(Lim::Of("robots.radius"), Lim::V(1e3)), "m", "Formation radius f_r (eq. 8-9)."),
+        k("behaviour.recheck", Bounds::Range(Lim::Of("scenario.dt"), Lim::V(1e5)), "s", "Time between the leader's checks of the pattern (and re-sends of the formation)."),
+        k("behaviour.group_speed", Bounds::Range(Lim::V(0.0), Lim::Of("robots.max_speed")), "m/s", "Speed of the formation's centre."),
+        k("behaviour.k_att", r(0.0, 1e3), "1/s", "k_att of the attractive potential (eq. 10-11)."),
+        k("behaviour.k_rep", r(0.0, 1e3), "m^3/s", "k_rep of the repulsive potential (eq. 10-11)."),
+        k("behaviour.rep_range", r(0.0, 1e3), "m", "rho_0: lidar hits farther than this exert no repulsion."),
+        k("behaviour.k_turn", r(0.0, 1e3), "1/s", "Turn gain: turn rate = k_turn * heading error."),
+        k("behaviour.turn_accel", r(1e-3, 1e6), "rad/s^2", "Largest change of the turn rate (the wheels' inertia)."),
+        k("behaviour.search_radius", r(0.0, 1e6), "m", "Maximum search radius r of eq. 13."),
+        k("behaviour.share_goal", Bounds::Any, "", "A leader that finds the goal tells the other leaders (false when each group has its own goal)."),
+        k("behaviour.arrive", r(0.0, 1e3), "m", "The formation's centre stops this close to the goal."),
+    ];
+
     fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
-        range_f("behaviour.grouping_time", self.grouping_time, 0.0, 1e5)?;
+        let keys = Self::KEYS;
+        let (low, high) = (|key| lo(keys, key), |key| hi(keys, key));
+        check_f(keys, "behaviour.grouping_time", self.grouping_time)?;
         range_f(
             "behaviour.cluster_distance",
             self.cluster_distance,
             2.0 * cfg.robots.radius,
-            1e3,
+            high("behaviour.cluster_distance"),
         )?;
-        range_f("behaviour.gravity", self.gravity, 0.0, 1e6)?;
-        range_f("behaviour.force_cap", self.force_cap, 1e-6, 1e6)?;
-        range_f("behaviour.decide_time", self.decide_time, 0.0, 1e5)?;
-        range_u64("behaviour.claim_period", self.claim_period as u64, 1, 10_000)?;
-        range_f("behaviour.radius", self.radius, cfg.robots.radius, 1e3)?;
-        range_f("behaviour.recheck", self.recheck, cfg.scenario.dt, 1e5)?;
-        range_f("behaviour.group_speed", self.group_speed, 0.0, cfg.robots.max_speed)?;
-        range_f("behaviour.k_att", self.k_att, 0.0, 1e3)?;
-        range_f("behaviour.k_rep", self.k_rep, 0.0, 1e3)?;
-        range_f("behaviour.rep_range", self.rep_range, 0.0, 1e3)?;
-        range_f("behaviour.k_turn", self.k_turn, 0.0, 1e3)?;
-        range_f("behaviour.turn_accel", self.turn_accel, 1e-3, 1e6)?;
-        range_f("behaviour.search_radius", self.search_radius, 0.0, 1e6)?;
-        range_f("behaviour.arrive", self.arrive, 0.0, 1e3)?;
+        check_f(keys, "behaviour.gravity", self.gravity)?;
+        check_f(keys, "behaviour.force_cap", self.force_cap)?;
+        check_f(keys, "behaviour.decide_time", self.decide_time)?;
+        check_u(keys, "behaviour.claim_period", self.claim_period as u64)?;
+        range_f(
+            "behaviour.radius",
+            self.radius,
+            cfg.robots.radius,
+            high("behaviour.radius"),
+        )?;
+        range_f(
+            "behaviour.recheck",
+            self.recheck,
+            cfg.scenario.dt,
+            high("behaviour.recheck"),
+        )?;
+        let slowest = low("behaviour.group_speed");
+        range_f(
+            "behaviour.group_speed",
+            self.group_speed,
+            slowest,
+            cfg.robots.max_speed,
+        )?;
+        check_f(keys, "behaviour.k_att", self.k_att)?;
+        check_f(keys, "behaviour.k_rep", self.k_rep)?;
+        check_f(keys, "behaviour.rep_range", self.rep_range)?;
+        check_f(keys, "behaviour.k_turn", self.k_turn)?;
+        check_f(keys, "behaviour.turn_accel", self.turn_accel)?;
+        check_f(keys, "behaviour.search_radius", self.search_radius)?;
+        check_f(keys, "behaviour.arrive", self.arrive)?;
         check(
             self.sense == Sense::RangeBearing || cfg.robots.lidar.rays >= 8,
             "behaviour.sense",

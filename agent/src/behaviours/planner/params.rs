@@ -2,7 +2,8 @@
 //! the paper, and how vehicles fly and hand over the routes.
 
 use serde::{Deserialize, Serialize};
-use swarmrt_scenario::validate::{check, range_f, range_u64};
+use swarmrt_scenario::reference::{Bounds, Key, Lim, check_f, check_u, k, lo, r};
+use swarmrt_scenario::validate::{check, range_f};
 use swarmrt_scenario::{Config, KeyError};
 
 use crate::behaviour::Params;
@@ -64,6 +65,23 @@ impl Default for PlannerParams {
 }
 
 impl Params for PlannerParams {
+    #[rustfmt::skip]
+    const KEYS: &'static [Key] = &[
+        k("behaviour.cell", r(0.05, 100.0), "m", "Cell edge d (the paper: 1)."),
+        k("behaviour.a", r(0.0, 1e6), "", "Attraction gain a of the potential, eq. 2 (the paper: 10)."),
+        k("behaviour.b", r(0.0, 1e6), "", "Repulsion gain b of the potential, eq. 2 (the paper: 50)."),
+        k("behaviour.delta", r(0.0, 600.0), "s", "Safe interval delta, eq. 1 (the paper: 1)."),
+        k("behaviour.epsilon", r(0.0, 100.0), "", "Bounded relaxation: a route costs at most (1 + epsilon) times the optimum."),
+        k("behaviour.cruise_speed", Bounds::Range(Lim::V(1e-3), Lim::Of("min(robots.max_speed / sqrt(2), robots.aerial.max_vertical_speed)")), "m/s", "Speed of a straight move between neighbouring cells: one move per `cell / cruise_speed` slot."),
+        k("behaviour.clearance", r(0.0, 100.0), "m", "Safe-distance zone of eq. 1 between cell centres (0: the same cell only)."),
+        k("behaviour.n_points", r(1.0, 1000.0), "", "Samples per segment when the smoothed route is checked against blocked cells."),
+        k("behaviour.lead_time", r(0.0, 3600.0), "s", "Time between planning and the routes' start, for the routes to commit."),
+        k("behaviour.lost_after", r(1.0, 1_000_000.0), "ticks", "A vehicle silent this long is lost: everyone hovers and the leader re-plans."),
+        k("behaviour.settle", r(0.0, 1_000_000.0), "ticks", "Ticks every vehicle must have hovered before the leader plans."),
+        k("behaviour.gain", r(0.0, 100.0), "1/s", "Gain pulling a vehicle back onto its route or hover point."),
+        k("behaviour.max_expansions", r(1.0, 100_000_000.0), "", "Search states expanded per route before giving up."),
+    ];
+
     fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
         check(
             cfg.robots.aerial.is_some(),
@@ -77,15 +95,23 @@ impl Params for PlannerParams {
             "consensus.algorithm",
             "\"raft\": the Raft leader plans and the log carries the routes",
         )?;
-        range_f("behaviour.cell", self.cell, 0.05, 100.0)?;
-        range_f("behaviour.a", self.a, 0.0, 1e6)?;
-        range_f("behaviour.b", self.b, 0.0, 1e6)?;
-        range_f("behaviour.delta", self.delta, 0.0, 600.0)?;
-        range_f("behaviour.epsilon", self.epsilon, 0.0, 100.0)?;
+        let keys = Self::KEYS;
+        check_f(keys, "behaviour.cell", self.cell)?;
+        check_f(keys, "behaviour.a", self.a)?;
+        check_f(keys, "behaviour.b", self.b)?;
+        check_f(keys, "behaviour.delta", self.delta)?;
+        check_f(keys, "behaviour.epsilon", self.epsilon)?;
         let vz = cfg.robots.aerial.map_or(0.0, |a| a.max_vertical_speed);
         // A move changes each axis by at most one cell per slot: sqrt(2) cells horizontally.
         let fastest = (cfg.robots.max_speed / 2f64.sqrt()).min(vz);
-        range_f("behaviour.cruise_speed", self.cruise_speed, 1e-3, fastest).map_err(|(k, _)| {
+        let slowest = lo(keys, "behaviour.cruise_speed");
+        range_f(
+            "behaviour.cruise_speed",
+            self.cruise_speed,
+            slowest,
+            fastest,
+        )
+        .map_err(|(k, _)| {
             (
                 k,
                 format!(
@@ -96,22 +122,23 @@ impl Params for PlannerParams {
                 ),
             )
         })?;
-        range_f("behaviour.clearance", self.clearance, 0.0, 100.0)?;
-        range_u64("behaviour.n_points", self.n_points as u64, 1, 1000)?;
-        range_f("behaviour.lead_time", self.lead_time, 0.0, 3600.0)?;
-        range_u64("behaviour.lost_after", self.lost_after as u64, 1, 1_000_000)?;
-        range_u64("behaviour.settle", self.settle as u64, 0, 1_000_000)?;
-        range_f("behaviour.gain", self.gain, 0.0, 100.0)?;
-        range_u64(
-            "behaviour.max_expansions",
-            self.max_expansions as u64,
-            1,
-            100_000_000,
-        )
+        check_f(keys, "behaviour.clearance", self.clearance)?;
+        check_u(keys, "behaviour.n_points", self.n_points as u64)?;
+        check_f(keys, "behaviour.lead_time", self.lead_time)?;
+        check_u(keys, "behaviour.lost_after", self.lost_after as u64)?;
+        check_u(keys, "behaviour.settle", self.settle as u64)?;
+        check_f(keys, "behaviour.gain", self.gain)?;
+        check_u(keys, "behaviour.max_expansions", self.max_expansions as u64)
     }
 }
 
 impl PlannerParams {
+    /// The parameters of a resolved config (`swarmrt_harness::config::load_run_config`);
+    /// `Err` at `behaviour.kind` when its behaviour is not `planner`.
+    pub fn of(cfg: &Config) -> Result<PlannerParams, KeyError> {
+        crate::registry::params::<super::Planner>(cfg)
+    }
+
     /// Seconds per slot: one move between neighbouring cells.
     pub fn slot(&self) -> f64 {
         self.cell / self.cruise_speed
