@@ -34,12 +34,10 @@
 pub mod agent;
 pub mod behaviour;
 pub mod behaviours;
-pub mod cli;
 pub mod consensus;
 pub mod inbox;
 pub mod overlay;
 pub mod registry;
-pub mod shell;
 pub mod wire;
 
 pub use agent::Agent;

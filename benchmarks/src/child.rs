@@ -61,7 +61,7 @@ impl Transport {
 pub enum LossMode {
     /// iceoryx2 defaults (subscriber buffer 2, safe overflow on), free-running publisher.
     Defaults,
-    /// The runtime's observation service (`protocol::ipc`), free-running publisher.
+    /// The runtime's observation service (`swarmrt_ipc`), free-running publisher.
     RuntimeFree,
     /// The runtime's services driven in lock-step, as the world and robots drive them.
     RuntimeLockStep,
@@ -93,10 +93,10 @@ impl LossMode {
         match self {
             LossMode::Defaults => "buffer 2, safe overflow on; publisher paced, never waits",
             LossMode::RuntimeFree => {
-                "protocol::ipc observation service (buffer 1, safe overflow on); publisher paced, never waits"
+                "swarmrt_ipc observation service (buffer 1, safe overflow on); publisher paced, never waits"
             }
             LossMode::RuntimeLockStep => {
-                "protocol::ipc services; one sample in flight, next after the reply (the runtime)"
+                "swarmrt_ipc services; one sample in flight, next after the reply (the runtime)"
             }
             LossMode::NoOverflow => {
                 "buffer 2, safe overflow off, publisher RetryUntilDelivered: paced, but blocks in send while the queue is full"
@@ -171,7 +171,7 @@ pub enum ChildSpec {
     PathWorld {
         /// Run id.
         run_id: String,
-        /// True: `protocol::ipc` services and types; false: raw `[u8]` services.
+        /// True: `swarmrt_ipc` services and types; false: raw `[u8]` services.
         runtime: bool,
         /// Seconds of measurement.
         secs: f64,

@@ -88,7 +88,7 @@ pub fn own_fds() -> usize {
 /// The publisher child: creates the services sized for `k` subscribers, waits for their
 /// hellos, measures for `secs`, tells them to exit, reports.
 pub fn publisher(run: &RunServices, k: usize, secs: f64) -> anyhow::Result<()> {
-    if let Err(e) = swarmrt_protocol::ipc::raise_fd_limit() {
+    if let Err(e) = swarmrt_ipc::raise_fd_limit() {
         tracing::warn!("cannot raise the open-file limit: {e}");
     }
     let node = bench_node(run, "bench-fanout-pub")?;

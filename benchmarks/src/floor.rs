@@ -1,5 +1,5 @@
 //! The floor: the runtime's lock-step loop with nothing in it. The same services
-//! (`protocol::ipc::create_services`: one observation slice publisher + one event to wake all
+//! (`swarmrt_ipc::create_services`: one observation slice publisher + one event to wake all
 //! robots, one shared command service + event back), the same message types and sizes, the
 //! same processes; but the world publishes a prepared slice instead of computing one, and a
 //! robot answers `Command::act` at once instead of thinking. What the runtime costs beyond
@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::bail;
 use serde::{Deserialize, Serialize};
-use swarmrt_protocol::ipc as proto_ipc;
+use swarmrt_ipc as proto_ipc;
 use swarmrt_protocol::services::RunServices;
 use swarmrt_protocol::{Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION};
 

@@ -114,7 +114,7 @@ pub struct PathResult {
     pub reply_bytes: usize,
     /// Raw iceoryx2 (`[u8]` services with default settings), ns.
     pub raw_rtt_ns: Summary,
-    /// `protocol::ipc` services and types, the shells' send/notify/wait pattern, ns.
+    /// `swarmrt_ipc` services and types, the shells' send/notify/wait pattern, ns.
     pub runtime_rtt_ns: Summary,
     /// runtime median / raw median.
     pub median_ratio: f64,

@@ -35,7 +35,7 @@ use anyhow::Context;
 use crossbeam_channel::{Receiver, Sender};
 use iceoryx2::prelude::*;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use swarmrt_protocol::ipc as proto_ipc;
+use swarmrt_ipc as proto_ipc;
 use swarmrt_protocol::services::RunServices;
 
 use swarmrt_orchestrator::cleanup;

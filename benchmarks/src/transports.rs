@@ -23,7 +23,7 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use serde::{Deserialize, Serialize};
-use swarmrt_protocol::ipc as proto_ipc;
+use swarmrt_ipc as proto_ipc;
 use swarmrt_protocol::services::RunServices;
 use swarmrt_protocol::{Command, Observation, ObservationHeader, PROTOCOL_VERSION};
 

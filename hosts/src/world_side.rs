@@ -1,6 +1,6 @@
 //! The world's end of the link: one publisher per host for its slots, one subscriber per host
 //! for its commands, and the hosts' liveliness. Incoming messages are decoded on Zenoh's
-//! threads and queued; the world's shell relays them into its main loop (`swarmrt_protocol::ipc::wake_relay`).
+//! threads and queued; the world's shell relays them into its main loop (`swarmrt_ipc::wake_relay`).
 
 use std::ops::Range;
 

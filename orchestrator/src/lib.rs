@@ -2,7 +2,7 @@
 //! writes run directories. Also runs the same cores in-process.
 #![warn(missing_docs)]
 
-pub use swarmrt_protocol::cleanup;
+pub use swarmrt_ipc::cleanup;
 pub mod cli;
 pub mod commands;
 pub mod config;

@@ -19,7 +19,7 @@ use swarmrt_protocol::services::RunServices;
 use swarmrt_scenario::Config;
 
 use crate::hosts::{HostMsg, Remotes, RunHosts};
-use swarmrt_protocol::cleanup;
+use swarmrt_ipc::cleanup;
 pub use swarmrt_scenario::process::{child_command, describe, signal_all};
 
 /// How long robots get to exit on the world's shutdown sample before they are sent SIGTERM
@@ -241,7 +241,7 @@ fn supervise(
     // iceoryx2's tools read `config/iceoryx2.toml` from their working directory, so
     // `cd <run dir> && iox2 service list` sees this run; robot programs load it too.
     let ipc_config = dir.join(crate::run_dir::IPC_CONFIG);
-    swarmrt_protocol::ipc::write_config_file(run, &ipc_config)
+    swarmrt_ipc::write_config_file(run, &ipc_config)
         .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", ipc_config.display()))?;
     let n = cfg.robots.count;
     let mut outcome = ProcessOutcome::default();

@@ -10,7 +10,7 @@
 
 use core::mem::{align_of, offset_of, size_of};
 
-use iceoryx2::prelude::ZeroCopySend;
+use iceoryx2_bb_elementary_traits::zero_copy_send::ZeroCopySend;
 
 use crate::messages::*;
 use crate::services::{EVENT_COMMAND, EVENT_CONTROL};

@@ -22,9 +22,7 @@
 //! ```
 #![warn(missing_docs)]
 
-pub mod cleanup;
 pub mod control;
-pub mod ipc;
 pub mod layout;
 pub mod messages;
 pub mod records;

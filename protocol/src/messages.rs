@@ -4,7 +4,8 @@
 //! instead of misread. Bounded collections are fixed arrays with a length field: shared memory
 //! holds no pointers.
 
-use iceoryx2::prelude::*;
+use iceoryx2_bb_derive_macros::ZeroCopySend;
+use iceoryx2_bb_elementary_traits::zero_copy_send::ZeroCopySend;
 
 /// Bumped whenever the layout or meaning of a message changes.
 pub const PROTOCOL_VERSION: u32 = 4;

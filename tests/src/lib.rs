@@ -23,6 +23,11 @@ pub fn workspace() -> PathBuf {
 /// Directory holding `swarm`, `swarm-world`, `swarm-agent` and `swarm-bench`, built once per
 /// test process with the same profile as the tests (cargo only builds a package's own
 /// binaries for its tests, and these live in other packages).
+///
+/// They are built as `cargo test --workspace` builds them: with the dev-dependencies' features
+/// (the robot's test hooks among them). A plain `cargo build -p ...` resolved features without
+/// them, so it compiled most of the graph a second time (syn, serde, hyper... all differ) on
+/// a fresh clone; this build is the test build's own, and fresh when the suite runs whole.
 pub fn bin_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
@@ -32,17 +37,8 @@ pub fn bin_dir() -> &'static Path {
         let release = profile_dir.file_name().is_some_and(|n| n == "release");
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
         let mut cmd = Command::new(cargo);
-        cmd.current_dir(workspace()).args([
-            "build",
-            "--quiet",
-            "-p",
-            "swarmrt-orchestrator",
-            "-p",
-            "swarmrt-bins",
-            "-p",
-            "swarmrt-benchmarks",
-            "--bins",
-        ]);
+        cmd.current_dir(workspace())
+            .args(["build", "--quiet", "--workspace", "--bins", "--tests"]);
         if release {
             cmd.arg("--release");
         }

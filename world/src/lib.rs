@@ -1,11 +1,12 @@
 //! The world: owns the truth of a run (DESIGN sections 2-5).
 //!
-//! The core ([`World`]) is a deterministic state machine; the process shell (`shell`) only
+//! The core ([`World`]) is a deterministic state machine with no I/O dependency: no iceoryx2,
+//! no Zenoh, no clap. Its process shell (`swarm-world`) is `swarmrt_runtime::world`, which only
 //! moves its observations and commands through iceoryx2.
 //!
 //! [`World::step`] (`world/mod.rs`) calls one stage per sibling file: `commands.rs`,
 //! `route.rs` (radio), `kinematics.rs`, `contacts.rs`, `sensing.rs` ([`World::observe`], goal
-//! check) and `faults.rs`; `stage_times.rs` times them when the shell asks ([`timing`]).
+//! check) and `faults.rs`; `stage_times.rs` times them when the shell asks.
 //!
 //! ```
 //! use swarmrt_protocol::{Command, Observation, Vocabulary};
@@ -38,14 +39,11 @@
 //! ```
 #![warn(missing_docs)]
 
-pub mod cli;
 pub mod grid;
 pub mod map;
 pub mod radio;
 pub mod records;
 pub mod rng;
-pub mod shell;
-pub mod timing;
 pub mod world;
 
 pub use world::{Event, ProcessSignal, Robot, Stage, StageTimes, World, WorldMetrics};

@@ -27,8 +27,8 @@ pub enum Error {
     Protocol(String),
 }
 
-impl From<swarmrt_protocol::ipc::IpcError> for Error {
-    fn from(e: swarmrt_protocol::ipc::IpcError) -> Self {
+impl From<swarmrt_ipc::IpcError> for Error {
+    fn from(e: swarmrt_ipc::IpcError) -> Self {
         Error::Ipc(e.to_string())
     }
 }

@@ -3,8 +3,8 @@
 //! `bindings/c/include/swarmrt.h`; the message structs it includes
 //! (`swarmrt_messages.h`) are generated from the Rust types.
 //!
-//! The iceoryx2 side is the Rust robot's own code (`swarmrt_protocol::ipc`: the run's node
-//! config, [`RobotPorts`](swarmrt_protocol::ipc::RobotPorts), hello) and its loop rules
+//! The iceoryx2 side is the Rust robot's own code (`swarmrt_ipc`: the run's node
+//! config, [`RobotPorts`](swarmrt_ipc::RobotPorts), hello) and its loop rules
 //! ([`robot`]); the decisions are the C program's. A C robot is:
 //!
 //! ```c

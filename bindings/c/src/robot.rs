@@ -1,4 +1,4 @@
-//! One robot process's side of a run, as `agent/src/shell.rs` does it for the Rust robot,
+//! One robot process's side of a run, as `runtime/src/robot/shell.rs` does it for the Rust robot,
 //! with the decision left to the caller: [`Robot::open`] opens the node and the ports and
 //! says hello, [`Robot::next`] sleeps until there is an observation to answer, and
 //! [`Robot::send`] answers it.
@@ -24,7 +24,7 @@ use std::time::Duration;
 
 use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::Node;
-use swarmrt_protocol::ipc::{self, RobotPorts, Svc};
+use swarmrt_ipc::{self as ipc, RobotPorts, Svc};
 use swarmrt_protocol::services::{RunServices, env, valid_run_id};
 use swarmrt_protocol::{Command, Observation, PROTOCOL_VERSION, RobotState};
 
@@ -342,9 +342,9 @@ mod tests {
         let e = Robot::open(env(1)).err().unwrap();
         assert!(e.to_string().starts_with("iceoryx2:"), "{e}");
         let run_id = env(1).run_id;
-        swarmrt_protocol::cleanup::remove_run(&run_id);
+        swarmrt_ipc::cleanup::remove_run(&run_id);
         assert_eq!(
-            swarmrt_protocol::cleanup::leftovers(&run_id),
+            swarmrt_ipc::cleanup::leftovers(&run_id),
             Vec::<String>::new()
         );
         assert_eq!(exit_code(Err(&e)), EXIT_FAILED);

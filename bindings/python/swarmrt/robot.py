@@ -1,4 +1,4 @@
-"""The robot side of a swarmrt run, in Python: what agent/src/shell.rs does for the Rust robot.
+"""The robot side of a swarmrt run, in Python: what runtime/src/robot/shell.rs does for the Rust robot.
 
 The orchestrator starts a robot program with the run's names in its environment
 (protocol/src/services.rs, `env`). `Robot.from_env()` opens a node with the run's own iceoryx2

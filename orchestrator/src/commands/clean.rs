@@ -1,7 +1,7 @@
 //! `swarm clean`: remove the iceoryx2 leftovers of runs whose orchestrator is gone.
 
 use crate::error::SwarmResult;
-use swarmrt_protocol::cleanup;
+use swarmrt_ipc::cleanup;
 
 /// Removes dead runs' resources and says what it did.
 pub fn clean() -> SwarmResult<()> {

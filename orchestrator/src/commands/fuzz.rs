@@ -10,6 +10,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::cli::{ConsensusArgs, ElectionArgs, FuzzCmd, QuadrantArgs};
 use crate::error::{SwarmError, SwarmResult};
+#[cfg(feature = "mutants")]
 use swarmrt_agent::consensus::raft::{Mutant, set_mutant};
 use swarmrt_harness::fuzz::{consensus, election, quadrant};
 
@@ -59,6 +60,37 @@ fn stopped() -> SwarmError {
     SwarmError::Interrupted("interrupted: stopped between seeds".into())
 }
 
+/// Selects the Raft core's known bug `name` for this thread's cores; only this thread runs
+/// them, so the mutant reaches them all and nothing else.
+#[cfg(feature = "mutants")]
+fn select_mutant(name: Option<&str>) -> SwarmResult<()> {
+    let mutant = match name {
+        None => None,
+        Some(name) => Some(Mutant::parse(name).ok_or_else(|| {
+            let names: Vec<&str> = Mutant::ALL.iter().map(|(n, _)| *n).collect();
+            user(format!(
+                "--mutant {name}: expected one of {}",
+                names.join(", ")
+            ))
+        })?),
+    };
+    set_mutant(mutant);
+    Ok(())
+}
+
+/// Without the `mutants` feature the Raft core has no known bugs to select: they are test
+/// code, kept out of the release robot (`swarm-agent`) and `swarm`.
+#[cfg(not(feature = "mutants"))]
+fn select_mutant(name: Option<&str>) -> SwarmResult<()> {
+    match name {
+        None => Ok(()),
+        Some(name) => Err(user(format!(
+            "--mutant {name}: this swarm was built without the Raft core's known bugs; \
+             build one with them: cargo build --release --features swarmrt-orchestrator/mutants"
+        ))),
+    }
+}
+
 fn fuzz_consensus(a: &ConsensusArgs, interrupt: &Receiver<()>) -> SwarmResult<()> {
     if a.seeds == 0 {
         return Err(user("--seeds: expected at least 1, got 0".into()));
@@ -73,18 +105,7 @@ fn fuzz_consensus(a: &ConsensusArgs, interrupt: &Receiver<()>) -> SwarmResult<()
         std::fs::create_dir_all(d)
             .map_err(|e| user(format!("--dump {}: cannot create: {e}", d.display())))?;
     }
-    let mutant = match &a.mutant {
-        None => None,
-        Some(name) => Some(Mutant::parse(name).ok_or_else(|| {
-            let names: Vec<&str> = Mutant::ALL.iter().map(|(n, _)| *n).collect();
-            user(format!(
-                "--mutant {name}: expected one of {}",
-                names.join(", ")
-            ))
-        })?),
-    };
-    // Only this thread runs the cores, so the mutant reaches them all and nothing else.
-    set_mutant(mutant);
+    select_mutant(a.mutant.as_deref())?;
     let started = Instant::now();
     let pb = progress(a.seeds);
     let mut failed: Vec<u64> = Vec::new();

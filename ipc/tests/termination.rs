@@ -1,8 +1,8 @@
 //! A termination request survives the signals that follow it. Its own test binary: it installs
 //! process-wide signal handlers and raises signals at itself.
 
-use swarmrt_protocol::cleanup;
-use swarmrt_protocol::ipc;
+use swarmrt_ipc as ipc;
+use swarmrt_ipc::cleanup;
 use swarmrt_protocol::services::RunServices;
 
 /// The orchestrator sends SIGTERM and then SIGCONT (so that a stopped robot can act on it).

@@ -15,17 +15,17 @@ use iceoryx2::prelude::*;
 use swarmrt_hosts::HostsFile;
 use swarmrt_hosts::wire::{Down, Up, encode_tick};
 use swarmrt_hosts::world_side::{Heard, HostTraffic, WorldLink};
+use swarmrt_ipc::{self as ipc, IpcError};
 use swarmrt_protocol::control::{Control, WorldReport};
-use swarmrt_protocol::ipc::{self, IpcError};
 use swarmrt_protocol::services::RunServices;
 use swarmrt_protocol::{
     Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION, RobotState,
 };
 use swarmrt_scenario::Config;
 
-use crate::records::RecordWriter;
-use crate::timing::{TickPhases, TickTimer, TickTiming};
-use crate::world::{ProcessSignal, World};
+use super::timing::{TickPhases, TickTimer, TickTiming};
+use swarmrt_world::records::RecordWriter;
+use swarmrt_world::{ProcessSignal, World};
 
 /// Longest the world waits for all robots to say hello.
 const STARTUP_TIMEOUT: Duration = Duration::from_secs(120);

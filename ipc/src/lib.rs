@@ -1,5 +1,7 @@
 //! How the processes of a run meet over iceoryx2: the per-run iceoryx2 config and the two
-//! service pairs of DESIGN section 2, created by the world and opened by robots.
+//! service pairs of DESIGN section 2, created by the world and opened by robots. The messages
+//! themselves are plain `#[repr(C)]` types in `swarmrt-protocol`, which the cores use without
+//! linking iceoryx2.
 //!
 //! Topology (flat in N, see DESIGN section 9): one observation service whose samples hold
 //! every robot's slot, one command service all robots publish on, and an event service beside
@@ -15,8 +17,10 @@ use iceoryx2::prelude::*;
 use iceoryx2_bb_system_types::file_name::FileName;
 use iceoryx2_bb_system_types::path::Path as IoxPath;
 
-use crate::messages::{Command, Observation, ObservationHeader};
-use crate::services::{EVENT_CONTROL, RunServices};
+use swarmrt_protocol::services::{EVENT_COMMAND, EVENT_CONTROL, RunServices};
+use swarmrt_protocol::{Command, Observation, ObservationHeader};
+
+pub mod cleanup;
 
 /// Shortcut for the iceoryx2 service flavour every process uses.
 pub type Svc = ipc::Service;
@@ -345,7 +349,7 @@ impl RobotPorts {
             publisher: commands.publisher_builder().create()?,
             notifier: commands_event
                 .notifier_builder()
-                .default_event_id(EventId::new(crate::services::EVENT_COMMAND))
+                .default_event_id(EventId::new(EVENT_COMMAND))
                 .create()?,
         })
     }

@@ -6,7 +6,7 @@
 
 use serde::Serialize;
 
-use crate::world::{Stage, StageTimes};
+use swarmrt_world::{Stage, StageTimes};
 
 /// Bucket width: each bucket spans a factor of this.
 const GROWTH: f64 = 1.01;
@@ -216,7 +216,7 @@ mod tests {
             &[],
         )
         .unwrap();
-        let mut world = crate::World::new(&cfg, swarmrt_protocol::Vocabulary::ANY).unwrap();
+        let mut world = swarmrt_world::World::new(&cfg, swarmrt_protocol::Vocabulary::ANY).unwrap();
         world.set_stage_timing(true);
         let mut obs = vec![Observation::empty(0, 0); 2];
         let mut timer = TickTimer::default();

@@ -3,10 +3,10 @@
 //! directory and shm prefix, so removal is exact: nothing of another run, or of other
 //! iceoryx2 users, is touched.
 
-use crate::services::{
+use std::path::Path;
+use swarmrt_protocol::services::{
     IPC_BASE_DIR, LEGACY_IPC_BASE_DIR, SHM_DIR, ipc_root_of, shm_prefix_of, valid_run_id,
 };
-use std::path::Path;
 
 /// File in a run's iceoryx2 root holding the orchestrator's pid.
 pub const OWNER_FILE: &str = "swarmrt-owner.pid";

@@ -1,6 +1,6 @@
 //! Command line of the `swarm-agent` process: one robot process. Started by `swarm run`, not by hand.
 
-use crate::shell;
+use super::shell;
 use clap::Parser;
 
 /// One robot of a swarmrt run.
@@ -45,7 +45,7 @@ pub fn main() -> std::process::ExitCode {
     };
     // The orchestrator resolved `[behaviour]` already; a hand-edited config is refused here
     // with its key rather than found out by a panic in the first tick.
-    if let Err(e) = crate::registry::resolve(&mut cfg, &args.config.display().to_string()) {
+    if let Err(e) = swarmrt_agent::registry::resolve(&mut cfg, &args.config.display().to_string()) {
         tracing::error!("{e}");
         return std::process::ExitCode::from(2);
     }

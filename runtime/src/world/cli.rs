@@ -1,6 +1,6 @@
 //! Command line of the `swarm-world` process: the world process of one run. Started by `swarm run`, not by hand.
 
-use crate::shell;
+use super::shell;
 use clap::Parser;
 
 /// The world process of a swarmrt run.

@@ -1,0 +1,12 @@
+//! The process shells around the pure cores: each moves a core's inputs and outputs through
+//! iceoryx2 (and Zenoh for remote hosts) and does nothing else.
+//!
+//! - [`world`]: the `swarm-world` process around `swarmrt_world::World`: creates the run's
+//!   services, binds robots by their hello, runs lock-step (or realtime) ticks, relays remote
+//!   hosts, writes the records.
+//! - [`robot`]: the `swarm-agent` process around `swarmrt_agent::Agent`: says hello, sleeps
+//!   until a tick, answers it.
+#![warn(missing_docs)]
+
+pub mod robot;
+pub mod world;

@@ -1,0 +1,124 @@
+//! The robot process shell: opens the run's services, says hello, then sleeps in an
+//! iceoryx2 listener until the world publishes a tick, answers it, and sleeps again.
+
+use std::time::Duration;
+
+use iceoryx2::port::listener::ListenerWaitError;
+use swarmrt_ipc::{self as ipc, IpcError};
+use swarmrt_protocol::services::RunServices;
+use swarmrt_protocol::{PROTOCOL_VERSION, RobotState};
+use swarmrt_scenario::Config;
+
+use swarmrt_agent::Agent;
+use swarmrt_agent::consensus::storage::Store;
+
+/// How long a robot sleeps before checking for a termination request when no tick comes
+/// (a watchdog interval, not a poll: a tick wakes it immediately).
+const IDLE_CHECK: Duration = Duration::from_millis(500);
+
+/// Why the robot loop ended.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Exit {
+    /// The world announced the end of the run.
+    Shutdown,
+    /// SIGINT or SIGTERM.
+    Terminated,
+}
+
+/// Runs robot `id` of run `run` until the world shuts down or the process is told to stop.
+/// `incarnation` is 0 for the first process of the robot and counts scheduled restarts.
+/// `storage` is the run's stable-storage directory: with `consensus.storage` on, the robot
+/// restores its persistent Raft state from it and writes that state there before each
+/// command leaves (write-ahead). `slot_offset` is the id of the first robot in the
+/// observation sample (0 beside the world; a remote host's first robot otherwise).
+pub fn run(
+    run: &RunServices,
+    cfg: &Config,
+    id: u32,
+    incarnation: u32,
+    storage: Option<&std::path::Path>,
+    slot_offset: u32,
+) -> Result<Exit, IpcError> {
+    let node = ipc::node(run, &run.robot_node_name(id))?;
+    let ports = ipc::RobotPorts::open(&node, run)?;
+
+    let (mut store, restored) = match storage {
+        Some(dir) if swarmrt_agent::consensus::stores_state(cfg) => {
+            if incarnation == 0 {
+                // The robot's first process: whatever a file there holds is not its state.
+                let _ = std::fs::remove_file(dir.join(format!("raft-{id}.state")));
+            }
+            let (store, state) = Store::open(dir, id)?;
+            (Some(store), state)
+        }
+        _ => (None, None),
+    };
+    if let Some(s) = &restored {
+        tracing::info!(
+            term = s.term,
+            last_index = s.log.last_index(),
+            "restored from stable storage"
+        );
+    }
+    let mut agent = match restored {
+        Some(state) => Agent::restore(cfg, id, state, incarnation),
+        None => Agent::fresh(cfg, id, incarnation),
+    };
+    #[cfg(feature = "misbehave")]
+    let misbehave = super::misbehave::Misbehave::from_env(id);
+    #[cfg(not(feature = "misbehave"))]
+    if std::env::var_os("SWARMRT_TEST_MISBEHAVE").is_some() {
+        tracing::warn!("SWARMRT_TEST_MISBEHAVE ignored: this robot was built without test hooks");
+    }
+    ports.hello(id)?;
+    tracing::debug!("hello sent");
+
+    loop {
+        // Drain every sample that arrived; each is one tick to answer, in order.
+        while let Some(sample) = ports.subscriber.receive()? {
+            let header = *sample.user_header();
+            if header.version != PROTOCOL_VERSION {
+                return Err(format!(
+                    "world speaks protocol {} but this robot speaks {PROTOCOL_VERSION}",
+                    header.version
+                )
+                .into());
+            }
+            if header.shutdown != 0 {
+                return Ok(Exit::Shutdown);
+            }
+            let Some(obs) = sample.payload().get((id - slot_offset) as usize) else {
+                return Err(format!("observation sample has no slot for robot {id}").into());
+            };
+            // Ticks in which this robot is frozen or restarting (a thawed or fresh process
+            // may find one still queued) expect no answer.
+            if !RobotState::from_u8(obs.state).is_some_and(RobotState::expects_command) {
+                continue;
+            }
+            let cmd = agent.step(obs);
+            drop(sample);
+            if let (Some(store), Some(state)) = (
+                store.as_mut(),
+                agent.consensus().and_then(|c| c.persistent()),
+            ) {
+                store.save(&state)?;
+            }
+            #[cfg(feature = "misbehave")]
+            let cmd = match misbehave {
+                Some(m) => m.corrupted(cmd, id, cfg, &ports)?,
+                None => cmd,
+            };
+            ports.send(cmd)?;
+        }
+        match ports.listener.timed_wait(|_| {}, IDLE_CHECK) {
+            Ok(_) => {}
+            // A signal interrupted the wait: SIGTERM/SIGINT (checked below) or the SIGCONT
+            // ending a freeze, after which Linux fails the wait with EINTR.
+            Err(ListenerWaitError::InterruptSignal) => {}
+            Err(e) => return Err(e.into()),
+        }
+        if ipc::termination_requested(&node) {
+            return Ok(Exit::Terminated);
+        }
+    }
+}

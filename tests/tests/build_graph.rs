@@ -1,0 +1,121 @@
+//! The build graph keeps its promises: the cores link no I/O stack, and the binaries users run
+//! carry no test code.
+//!
+//! The Raft core's known bugs (`mutants`) and the robot's malformed-command hooks
+//! (`misbehave`) are features that only test builds turn on; a normal dependency that turned
+//! one on would compile it into `swarm-agent` and `swarm` through feature unification.
+
+use std::process::Command;
+
+use swarmrt_tests::workspace;
+
+/// `cargo tree` from the workspace root with `args`; its lines.
+fn cargo_tree(args: &[&str]) -> Vec<String> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
+    let out = Command::new(cargo)
+        .current_dir(workspace())
+        .args(["tree", "--locked", "--prefix", "none"])
+        .args(args)
+        .output()
+        .expect("cargo tree runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(str::to_string)
+        .collect()
+}
+
+/// The crates holding the deterministic cores and what reads their records: inputs in,
+/// outputs out. Their process shells live in `swarmrt-runtime`, `swarmrt-ipc` and
+/// `swarmrt-hosts`.
+const CORES: [&str; 7] = [
+    "swarmrt-protocol",
+    "swarmrt-scenario",
+    "swarmrt-planner",
+    "swarmrt-world",
+    "swarmrt-agent",
+    "swarmrt-analysis",
+    "swarmrt-harness",
+];
+
+/// Shared memory, the network and the command line: what a core must not link.
+const IO_STACKS: [&str; 6] = [
+    "iceoryx2",
+    "iceoryx2-cal",
+    "iceoryx2-bb-posix",
+    "zenoh",
+    "tokio",
+    "clap",
+];
+
+/// The I/O crates in `krate`'s normal dependency tree.
+fn io_stacks_of(krate: &str) -> Vec<String> {
+    let mut found: Vec<String> = cargo_tree(&["-p", krate, "-e", "normal"])
+        .iter()
+        .filter_map(|l| l.split(' ').next())
+        .filter(|name| IO_STACKS.contains(name))
+        .map(str::to_string)
+        .collect();
+    found.sort();
+    found.dedup();
+    found
+}
+
+#[test]
+fn the_core_crates_link_no_shared_memory_network_or_command_line_stack() {
+    for krate in CORES {
+        assert_eq!(io_stacks_of(krate), Vec::<String>::new(), "{krate}");
+    }
+}
+
+/// The check can fail: the runtime, which is the shells, links them.
+#[test]
+fn the_shells_are_seen_linking_them() {
+    assert_eq!(
+        io_stacks_of("swarmrt-runtime"),
+        [
+            "clap",
+            "iceoryx2",
+            "iceoryx2-bb-posix",
+            "iceoryx2-cal",
+            "tokio",
+            "zenoh"
+        ]
+    );
+}
+
+/// The features of `swarmrt-agent` in the build of the default members (`swarm`,
+/// `swarm-world`, `swarm-agent`, `swarm-host`, `swarm-bench`), as `cargo tree` resolves them.
+fn agent_features(extra: &[&str]) -> Vec<String> {
+    let mut args = vec!["-p", "swarmrt-orchestrator", "-p", "swarmrt-bins"];
+    args.extend(["-p", "swarmrt-benchmarks", "-e", "normal,build,features"]);
+    args.extend(["-i", "swarmrt-agent"]);
+    args.extend(extra);
+    let mut features: Vec<String> = cargo_tree(&args)
+        .iter()
+        .filter_map(|l| l.strip_prefix("swarmrt-agent feature \""))
+        .filter_map(|l| l.split('"').next())
+        .map(str::to_string)
+        .collect();
+    features.sort();
+    features.dedup();
+    features
+}
+
+#[test]
+fn the_release_robot_and_swarm_carry_no_mutants_and_no_test_hooks() {
+    assert_eq!(agent_features(&[]), ["default"]);
+}
+
+/// The check can fail: asking for the mutants build shows the feature.
+#[test]
+fn the_mutants_build_is_seen_by_the_check() {
+    assert_eq!(
+        agent_features(&["--features", "swarmrt-orchestrator/mutants"]),
+        ["default", "mutants"]
+    );
+}
