@@ -39,9 +39,7 @@ pub fn from_records(cfg: &Config, dir: &Path) -> anyhow::Result<Value> {
 
 /// Tick at which the last robot that reached the target got there; `None` if none did.
 pub fn steps_to_target(rec: &Records) -> Option<u64> {
-    rec.events_of("reached")
-        .filter_map(|e| e["tick"].as_u64())
-        .max()
+    rec.reached().map(|(tick, _)| tick).max()
 }
 
 /// Share of lidar energy saved against every active robot having its lidar on every tick

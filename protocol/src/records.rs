@@ -3,6 +3,7 @@
 //! plots, the viewer) reads back. Columns are found by name, so a reader never depends on their
 //! order.
 
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -58,7 +59,8 @@ pub enum Event<N> {
         /// The robot.
         robot: u32,
         /// What it said: the world writes it as the robots' vocabulary renders it
-        /// ([`crate::NoteJson`]); a reader takes it as JSON (`serde_json::Value`).
+        /// ([`crate::NoteJson`]); a reader takes it as JSON (`serde_json::Value`) and decodes
+        /// it as the robots' note type ([`Records::notes_as`]).
         note: N,
     },
     /// A robot sent a command the world refused (logged once per robot and reason).
@@ -216,13 +218,16 @@ impl Columns {
 pub struct Records {
     /// Rows grouped by tick, in tick order; each holds every robot, in id order.
     pub ticks: Vec<Vec<Row>>,
-    /// Every event line, parsed.
-    pub events: Vec<Value>,
+    /// Every `events.jsonl` line that parses as an [`Event`], in record order. A note's body
+    /// stays JSON here (this crate cannot see the robots' note types): read it typed with
+    /// [`Records::notes_as`] or [`Records::try_notes_as`].
+    pub events: Vec<Event<Value>>,
 }
 
 impl Records {
     /// Parses the text of `trajectory.csv` and `events.jsonl` (lines that are not whole are
-    /// skipped, as a crashed run's last line may be).
+    /// skipped, as a crashed run's last line may be; so are event lines of a kind this build
+    /// does not know).
     pub fn parse(trajectory: &str, events: &str) -> Result<Records, String> {
         let mut lines = trajectory.lines();
         let cols = Columns::from_header(lines.next().unwrap_or(""))?;
@@ -240,14 +245,58 @@ impl Records {
         Ok(Records { ticks, events })
     }
 
-    /// Events of one kind (`"event"` field).
-    pub fn events_of<'a>(&'a self, kind: &'a str) -> impl Iterator<Item = &'a Value> {
-        self.events.iter().filter(move |e| e["event"] == kind)
+    /// `(tick, robot)` of every `reached` event, in record order.
+    pub fn reached(&self) -> impl Iterator<Item = (u64, u32)> + '_ {
+        self.events.iter().filter_map(|e| match *e {
+            Event::Reached { tick, robot } => Some((tick, robot)),
+            _ => None,
+        })
     }
 
-    /// The notes robots reported (`"note"` events' `note` field), in record order.
-    pub fn notes(&self) -> impl Iterator<Item = &Value> {
-        self.events_of("note").map(|e| &e["note"])
+    /// `(tick, robot, other)` of every `collision` event, in record order.
+    pub fn collisions(&self) -> impl Iterator<Item = (u64, u32, Option<u32>)> + '_ {
+        self.events.iter().filter_map(|e| match *e {
+            Event::Collision { tick, robot, other } => Some((tick, robot, other)),
+            _ => None,
+        })
+    }
+
+    /// `(tick, robot, note)` of every `note` event, the note as recorded JSON, in record order.
+    pub fn notes(&self) -> impl Iterator<Item = (u64, u32, &Value)> {
+        self.events.iter().filter_map(|e| match e {
+            Event::Note { tick, robot, note } => Some((*tick, *robot, note)),
+            _ => None,
+        })
+    }
+
+    /// Every note decoded as `T`, in record order: `Err` for a note that is not one (a note of
+    /// another kind, or one written by a build whose note type differed).
+    pub fn try_notes_as<T: DeserializeOwned>(
+        &self,
+    ) -> impl Iterator<Item = (u64, u32, Result<T, serde_json::Error>)> + '_ {
+        self.notes()
+            .map(|(tick, robot, note)| (tick, robot, T::deserialize(note)))
+    }
+
+    /// `(tick, robot, note)` of every note that decodes as `T`, in record order; the others
+    /// are left out (use [`Records::try_notes_as`] where a note that does not decode matters).
+    pub fn notes_as<T: DeserializeOwned>(&self) -> impl Iterator<Item = (u64, u32, T)> + '_ {
+        self.try_notes_as()
+            .filter_map(|(tick, robot, note)| Some((tick, robot, note.ok()?)))
+    }
+}
+
+impl<N> Event<N> {
+    /// The tick the event belongs to.
+    pub fn tick(&self) -> u64 {
+        match *self {
+            Event::Collision { tick, .. }
+            | Event::Reached { tick, .. }
+            | Event::Died { tick, .. }
+            | Event::Fault { tick, .. }
+            | Event::Note { tick, .. }
+            | Event::Rejected { tick, .. } => tick,
+        }
     }
 }
 

@@ -71,5 +71,49 @@ fn trajectory_columns_are_found_by_name() {
     assert_eq!(rec.ticks.len(), 2);
     assert_eq!(rec.ticks[1].len(), 1, "the cut last line is skipped");
     assert!(!rec.ticks[0][1].active);
-    assert_eq!(rec.events_of("reached").count(), 1);
+    assert_eq!(rec.reached().collect::<Vec<_>>(), [(1, 0)]);
+}
+
+/// A note type as a behaviour declares one: recorded as itself, read back as itself.
+#[derive(Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum TestNote {
+    Turn { dir: i8 },
+    Flip,
+}
+
+#[test]
+fn events_read_back_typed_and_notes_decode_as_their_type() {
+    let events = [
+        r#"{"event":"collision","tick":3,"robot":1,"other":2}"#,
+        r#"{"event":"note","tick":4,"robot":1,"note":{"turn":{"dir":-1}}}"#,
+        r#"{"event":"note","tick":4,"robot":2,"note":{"consensus":{"truncate":{"index":3}}}}"#,
+        r#"{"event":"from_the_future","tick":5}"#,
+        r#"{"event":"note","tick":5,"robot":0,"note":"flip"}"#,
+        r#"{"event":"note","tick":6,"robot":0,"note":{"turn":{"direction":1}}}"#,
+        r#"{"event":"reached","tick":7,"robot":2}"#,
+        r#"{"event":"collision","tick":8,"robot":0}"#,
+        r#"{"event":"reached","tick":9,"rob"#,
+    ]
+    .join("\n");
+    let rec = Records::parse("tick,id,x,y,theta,v,omega,lidar,state\n", &events).unwrap();
+    assert_eq!(rec.events.len(), 7, "unknown and cut lines are skipped");
+    assert_eq!(rec.events[4].tick(), 6);
+    assert_eq!(rec.reached().collect::<Vec<_>>(), [(7, 2)]);
+    assert_eq!(
+        rec.collisions().collect::<Vec<_>>(),
+        [(3, 1, Some(2)), (8, 0, None)]
+    );
+    assert_eq!(rec.notes().count(), 4);
+    assert_eq!(
+        rec.notes_as::<TestNote>().collect::<Vec<_>>(),
+        [(4, 1, TestNote::Turn { dir: -1 }), (5, 0, TestNote::Flip)]
+    );
+    // A renamed field is an error, not a note read as a default.
+    let failed: Vec<(u64, u32)> = rec
+        .try_notes_as::<TestNote>()
+        .filter(|(_, _, n)| n.is_err())
+        .map(|(t, r, _)| (t, r))
+        .collect();
+    assert_eq!(failed, [(4, 2), (6, 0)]);
 }

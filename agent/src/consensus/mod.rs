@@ -50,7 +50,7 @@ use swarmrt_scenario::consensus::{Algorithm, ConsensusConfig};
 use crate::inbox::Heard;
 use crate::registry::{Note, RadioMsg};
 pub use messages::{ConsensusMsg, Decision, Entry, Item, ROUTE_PART_MOVES, RoutePart, UNSCHEDULED};
-pub use notes::{ConsensusNote, Role, SentCounts};
+pub use notes::{ConsensusNote, RecordedNote, Role, SentCounts, behaviour_notes};
 use quadrant::Quadrant;
 use raft::{Persistent, Raft, RaftParams};
 

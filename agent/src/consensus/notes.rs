@@ -1,7 +1,12 @@
 //! The notes a robot reports about its own consensus state (within
 //! [`swarmrt_protocol::MAX_REPORT`] bytes per tick, postcard-encoded like the messages).
+//! How notes read back from `events.jsonl`: [`RecordedNote`] tells a consensus note from a
+//! behaviour's, and [`behaviour_notes`] gives a behaviour's metrics its own notes, typed.
 
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use swarmrt_protocol::records::Records;
 
 use super::messages::{ConsensusMsg, Decision};
 
@@ -166,4 +171,51 @@ impl ConsensusNote {
             } | ConsensusNote::Quadrant { leads: true, .. }
         )
     }
+}
+
+/// A note as `events.jsonl` records it (the `note` field of a `note` event): the consensus
+/// layer's tagged, `{"consensus":{...}}`, a behaviour's as itself (`N`, the behaviour's
+/// [`crate::behaviour::Behaviour::Note`]). How [`crate::registry::Note::to_json`] writes them.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RecordedNote<N> {
+    /// A consensus note.
+    Consensus(ConsensusNote),
+    /// A behaviour's note.
+    Behaviour(N),
+}
+
+impl<N: DeserializeOwned> RecordedNote<N> {
+    /// Decodes a recorded note: an object with a `consensus` key must be a [`ConsensusNote`],
+    /// anything else an `N`; `Err` says why it is neither.
+    pub fn from_json(note: &Value) -> Result<RecordedNote<N>, serde_json::Error> {
+        match note.as_object().and_then(|o| o.get("consensus")) {
+            Some(c) => ConsensusNote::deserialize(c).map(RecordedNote::Consensus),
+            None => N::deserialize(note).map(RecordedNote::Behaviour),
+        }
+    }
+}
+
+impl<'de, N: DeserializeOwned> Deserialize<'de> for RecordedNote<N> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        RecordedNote::from_json(&Value::deserialize(d)?).map_err(serde::de::Error::custom)
+    }
+}
+
+/// A behaviour's own notes in a run's records, decoded as its note type `N`, in record order;
+/// consensus notes are left out. A note that is neither (a record written by a build whose
+/// note types differed) is left out with a warning, never read as some default.
+pub fn behaviour_notes<N: DeserializeOwned>(run: &Records) -> impl Iterator<Item = (u64, u32, N)> {
+    run.try_notes_as::<RecordedNote<N>>()
+        .filter_map(|(tick, robot, note)| match note {
+            Ok(RecordedNote::Behaviour(n)) => Some((tick, robot, n)),
+            Ok(RecordedNote::Consensus(_)) => None,
+            Err(e) => {
+                tracing::warn!(
+                    tick,
+                    robot,
+                    "a note this build cannot read is left out: {e}"
+                );
+                None
+            }
+        })
 }

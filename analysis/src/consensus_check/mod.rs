@@ -23,8 +23,9 @@
 
 use std::collections::BTreeMap;
 
+use serde::de::IgnoredAny;
 use serde_json::{Value, json};
-use swarmrt_agent::consensus::{ConsensusNote, Decision, Role, SentCounts};
+use swarmrt_agent::consensus::{ConsensusNote, Decision, RecordedNote, Role, SentCounts};
 use swarmrt_protocol::records::{Event, FaultKind};
 
 /// A broken property.
@@ -580,12 +581,14 @@ impl Checker {
                 continue;
             };
             match event {
+                // Consensus notes are recorded as `{"consensus": {...}}`; a behaviour's notes
+                // (any other JSON) are none of the checker's business.
                 Event::Note { robot, note, .. } => {
-                    // Consensus notes are recorded as `{"consensus": {...}}`.
-                    if let Some(cn) = note.get("consensus") {
-                        let cn: ConsensusNote = serde_json::from_value(cn.clone())
-                            .map_err(|e| format!("events.jsonl line {}: note: {e}", n + 1))?;
-                        c.note(t, robot, &cn);
+                    match RecordedNote::<IgnoredAny>::from_json(&note)
+                        .map_err(|e| format!("events.jsonl line {}: note: {e}", n + 1))?
+                    {
+                        RecordedNote::Consensus(cn) => c.note(t, robot, &cn),
+                        RecordedNote::Behaviour(_) => {}
                     }
                 }
                 Event::Died { robot, .. } => c.died(t, robot),

@@ -19,9 +19,11 @@ use serde_json::{Value, json};
 use swarmrt_protocol::records::{Records, Row};
 use swarmrt_scenario::Config;
 
+use super::messages::ChainNote;
 use super::params::ChainParams;
 use super::rods::connector_angle;
 use crate::behaviour::{Series, SeriesPlot};
+use crate::consensus::behaviour_notes;
 
 /// The metrics [`metrics`] computes, as dotted paths into metrics.json.
 pub const NAMES: [&str; 14] = [
@@ -121,22 +123,32 @@ pub fn metrics(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<(&'static st
         }
     }
     let (mut vetoes, mut depth, mut replans) = (0u64, 0u64, 0u64);
-    for note in run.notes() {
-        if let Some(d) = note["veto"]["depth"].as_u64() {
-            vetoes += u64::from(d == 1);
-            depth = depth.max(d);
-        }
-        if let Some(d) = note["replan"]["depth"].as_u64() {
-            replans += 1;
-            depth = depth.max(d);
-        }
+    for (_, _, note) in behaviour_notes::<ChainNote>(run) {
+        let d = match note {
+            ChainNote::Veto { depth: d, .. } => {
+                vetoes += u64::from(d == 1);
+                d
+            }
+            ChainNote::Replan { depth: d, .. } => {
+                replans += 1;
+                d
+            }
+        };
+        depth = depth.max(u64::from(d));
     }
     let moves = first_moves(run);
     let t0 = moves.0.get(c).copied().flatten();
     let ends = if n > 0 { ends(n, c) } else { Vec::new() };
     let propagation = t0.and_then(|t0| {
         ends.iter()
-            .map(|&e| moves.0.get(e).copied().flatten().map(|t| t.saturating_sub(t0)))
+            .map(|&e| {
+                moves
+                    .0
+                    .get(e)
+                    .copied()
+                    .flatten()
+                    .map(|t| t.saturating_sub(t0))
+            })
             .collect::<Option<Vec<u64>>>()
             .and_then(|v| v.into_iter().max())
     });
@@ -159,9 +171,9 @@ pub fn metrics(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<(&'static st
         .sum();
     let tail = ends.last().copied();
     let tail_tick = run
-        .events_of("reached")
-        .find(|e| tail.is_some_and(|t| e["robot"].as_u64() == Some(t as u64)))
-        .and_then(|e| e["tick"].as_u64());
+        .reached()
+        .find(|&(_, r)| tail.is_some_and(|t| r as usize == t))
+        .map(|(tick, _)| tick);
     let finite = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
     let all = json!({
         "rod_violations": rod_bad,
@@ -178,8 +190,8 @@ pub fn metrics(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<(&'static st
         "propagation_per_robot": propagation.filter(|_| hops > 0).map(|t| t as f64 / hops as f64),
         "head_progress": progress,
         "head_path": path,
-        "collisions": run.events_of("collision").count(),
-        "reached": run.events_of("reached").count(),
+        "collisions": run.collisions().count(),
+        "reached": run.reached().count(),
         "tail_reached": tail_tick.is_some(),
         "tail_reached_tick": tail_tick,
     });
@@ -219,20 +231,18 @@ pub fn series(cfg: &Config, p: &ChainParams, run: &Records) -> Vec<Series> {
     // to it (Fig. 3's back-propagation, one line per event).
     let mut vetoes = Vec::new();
     let mut event = 0u64;
-    for e in run.events_of("note") {
-        let (robot, tick) = (e["robot"].as_u64(), e["tick"].as_u64());
-        let n = &e["note"];
-        let depth = n["veto"]["depth"].as_u64().or(n["replan"]["depth"].as_u64());
-        if let (Some(robot), Some(tick), Some(depth)) = (robot, tick, depth) {
-            event += u64::from(n["veto"]["depth"].as_u64() == Some(1));
-            vetoes.push(vec![
-                tick as f64,
-                tick as f64 * dt,
-                robot as f64,
-                depth as f64,
-                event as f64,
-            ]);
-        }
+    for (tick, robot, note) in behaviour_notes::<ChainNote>(run) {
+        let depth = match note {
+            ChainNote::Veto { depth, .. } | ChainNote::Replan { depth, .. } => depth,
+        };
+        event += u64::from(matches!(note, ChainNote::Veto { depth: 1, .. }));
+        vetoes.push(vec![
+            tick as f64,
+            tick as f64 * dt,
+            robot as f64,
+            depth as f64,
+            event as f64,
+        ]);
     }
     let mut out = vec![
         Series {

@@ -4,7 +4,8 @@ use serde_json::{Value, json};
 use swarmrt_protocol::records::Records;
 use swarmrt_scenario::Config;
 
-use super::offsets;
+use super::{FormationNote, offsets};
+use crate::consensus::behaviour_notes;
 
 /// A loop: the virtual leader comes back within this distance of where it was (metres) ...
 pub const LOOP_RADIUS: f64 = 1.0;
@@ -55,7 +56,11 @@ pub fn metrics(cfg: &Config, rec: &Records) -> Vec<(&'static str, Value)> {
         ("loop_ticks", json!(loop_ticks)),
         (
             "epsilon_flips",
-            json!(rec.notes().filter(|n| *n == "epsilon_flip").count()),
+            json!(
+                behaviour_notes::<FormationNote>(rec)
+                    .filter(|(_, _, n)| *n == FormationNote::EpsilonFlip)
+                    .count()
+            ),
         ),
     ]
 }

@@ -10,7 +10,9 @@ use serde_json::{Value, json};
 use swarmrt_protocol::records::Records;
 use swarmrt_scenario::{Config, wrap_angle};
 
+use super::messages::GroupNote;
 use super::params::GroupingParams;
+use crate::consensus::behaviour_notes;
 
 /// The metrics [`metrics`] computes, as dotted paths into metrics.json.
 pub const NAMES: [&str; 11] = [
@@ -61,48 +63,32 @@ pub fn delta_omega(headings: &[f64], dt: f64) -> f64 {
     (sum / (omega.len() - 1) as f64).to_degrees()
 }
 
-fn note_key(note: &Value) -> Option<&str> {
-    match note {
-        Value::String(s) => Some(s),
-        Value::Object(m) => m.keys().next().map(|k| k.as_str()),
-        _ => None,
-    }
-}
-
-fn u64_of(v: &Value) -> u64 {
-    v.as_u64().unwrap_or(0)
-}
-
 /// Every robot's run, in id order.
 pub fn robot_runs(cfg: &Config, run: &Records) -> Vec<RobotRun> {
     let n = cfg.robots.count as usize;
     let dt = cfg.scenario.dt;
     let mut reached: Vec<Option<u64>> = vec![None; n];
-    for e in run.events_of("reached") {
-        let r = u64_of(&e["robot"]) as usize;
+    for (tick, r) in run.reached() {
+        let r = r as usize;
         if r < n && reached[r].is_none() {
-            reached[r] = Some(u64_of(&e["tick"]));
+            reached[r] = Some(tick);
         }
     }
     let mut collisions = vec![0u32; n];
-    for e in run.events_of("collision") {
-        for key in ["robot", "other"] {
-            if let Some(r) = e[key].as_u64()
-                && (r as usize) < n
-            {
+    for (_, robot, other) in run.collisions() {
+        for r in std::iter::once(robot).chain(other) {
+            if (r as usize) < n {
                 collisions[r as usize] += 1;
             }
         }
     }
     let mut leader: Vec<Option<u32>> = vec![None; n];
     let mut formed: Vec<Option<u64>> = vec![None; n];
-    for e in run.events_of("note") {
-        let r = u64_of(&e["robot"]) as usize;
-        match note_key(&e["note"]) {
-            Some("leader") if r < n => {
-                leader[r] = e["note"]["leader"]["leader"].as_u64().map(|l| l as u32);
-            }
-            Some("formed") if r < n && formed[r].is_none() => formed[r] = Some(u64_of(&e["tick"])),
+    for (tick, r, note) in behaviour_notes::<GroupNote>(run) {
+        let r = r as usize;
+        match note {
+            GroupNote::Leader { leader: l, .. } if r < n => leader[r] = Some(l),
+            GroupNote::Formed { .. } if r < n && formed[r].is_none() => formed[r] = Some(tick),
             _ => {}
         }
     }
@@ -129,7 +115,10 @@ pub fn robot_runs(cfg: &Config, run: &Records) -> Vec<RobotRun> {
             id: i as u32,
             leader: leader[i],
             t_s: reached[i].map(|t| t as f64 * dt),
-            t_nav: match (reached[i], leader[i].and_then(|l| formed.get(l as usize).copied().flatten())) {
+            t_nav: match (
+                reached[i],
+                leader[i].and_then(|l| formed.get(l as usize).copied().flatten()),
+            ) {
                 (Some(r), Some(f)) => Some(r.saturating_sub(f) as f64 * dt),
                 _ => None,
             },
@@ -153,26 +142,41 @@ pub fn metrics(
 ) -> Vec<(&'static str, Value)> {
     let dt = cfg.scenario.dt;
     let robots = robot_runs(cfg, run);
-    // First tick of each kind of note per robot, and the classifier's counts.
-    let mut first: BTreeMap<(u32, &str), u64> = BTreeMap::new();
+    // First tick per robot of the notes that time the exploration, and the classifier's
+    // counts.
+    let mut first_formed: BTreeMap<u32, u64> = BTreeMap::new();
+    let mut first_seen: BTreeMap<u32, u64> = BTreeMap::new();
+    let mut first_told: BTreeMap<u32, u64> = BTreeMap::new();
     let (mut correct, mut wrong) = (0u64, 0u64);
     let mut changes: BTreeMap<u32, u64> = BTreeMap::new();
     let mut leads: BTreeMap<u32, bool> = BTreeMap::new();
-    for e in run.events_of("note") {
-        let r = u64_of(&e["robot"]) as u32;
-        let Some(k) = note_key(&e["note"]) else { continue };
-        first.entry((r, k)).or_insert(u64_of(&e["tick"]));
-        match k {
-            "classified" => {
-                correct += u64_of(&e["note"]["classified"]["correct"]);
-                wrong += u64_of(&e["note"]["classified"]["wrong"]);
+    for (tick, r, note) in behaviour_notes::<GroupNote>(run) {
+        match note {
+            GroupNote::Formed { .. } => {
+                first_formed.entry(r).or_insert(tick);
             }
-            "leader" => {
-                let l = &e["note"]["leader"];
-                changes.insert(r, u64_of(&l["changes"]));
-                leads.insert(r, l["leads"].as_bool().unwrap_or(false));
+            GroupNote::GoalSeen => {
+                first_seen.entry(r).or_insert(tick);
             }
-            _ => {}
+            GroupNote::GoalTold => {
+                first_told.entry(r).or_insert(tick);
+            }
+            GroupNote::Classified {
+                correct: c,
+                wrong: w,
+            } => {
+                correct += u64::from(c);
+                wrong += u64::from(w);
+            }
+            GroupNote::Leader {
+                leads: l,
+                changes: c,
+                ..
+            } => {
+                changes.insert(r, u64::from(c));
+                leads.insert(r, l);
+            }
+            GroupNote::Clustered | GroupNote::Arrived => {}
         }
     }
     let mut groups: BTreeMap<u32, Vec<&RobotRun>> = BTreeMap::new();
@@ -184,12 +188,9 @@ pub fn metrics(
     let per_group: Vec<Value> = groups
         .iter()
         .map(|(&l, members)| {
-            let goal = ["goal_seen", "goal_told"]
-                .iter()
-                .filter_map(|k| first.get(&(l, *k)))
-                .min()
-                .copied();
-            let formed = first.get(&(l, "formed")).copied();
+            let seen = first_seen.get(&l).copied();
+            let goal = seen.into_iter().chain(first_told.get(&l).copied()).min();
+            let formed = first_formed.get(&l).copied();
             let explore = match (goal, formed) {
                 (Some(g), Some(f)) => Some(g.saturating_sub(f) as f64 * dt),
                 _ => None,
@@ -204,7 +205,7 @@ pub fn metrics(
                 "collisions": members.iter().map(|r| r.collisions).sum::<u32>(),
                 "reached": members.iter().filter(|r| r.t_s.is_some()).count(),
                 "explore_time": explore,
-                "found_goal": goal.map(|g| if first.get(&(l, "goal_seen")) == Some(&g) { "seen" } else { "told" }),
+                "found_goal": goal.map(|g| if seen == Some(g) { "seen" } else { "told" }),
             })
         })
         .collect();
@@ -215,7 +216,7 @@ pub fn metrics(
                    "delta_omega": r.delta_omega, "collisions": r.collisions})
         })
         .collect();
-    let collisions = run.events_of("collision").count();
+    let collisions = run.collisions().count();
     let all = json!({
         "groups": groups.len(),
         "leaders": leads.values().filter(|&&b| b).count(),

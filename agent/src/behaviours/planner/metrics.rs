@@ -11,7 +11,8 @@ use swarmrt_scenario::Config;
 
 use swarmrt_planner::{Reservations, plan_all};
 
-use super::{PlannerParams, scene};
+use super::{PlanNote, PlannerParams, scene};
+use crate::consensus::behaviour_notes;
 
 /// The scalar metrics [`metrics`] computes, as sweeps and tunes name them.
 pub const NAMES: &[&str] = &[
@@ -27,8 +28,26 @@ pub const NAMES: &[&str] = &[
     "planner.collisions",
 ];
 
-fn u64_of(v: &Value) -> u64 {
-    v.as_u64().unwrap_or(0)
+/// A planned route as its `planned` note tells it.
+struct Planned {
+    plan: u32,
+    vehicle: u32,
+    start_slot: u32,
+    moves: u32,
+    /// The cost as the record holds it: the `f32` written as its shortest decimal and read
+    /// back as `f64` (widening the `f32` would give other digits).
+    cost: f64,
+    expansions: u32,
+}
+
+/// `x` as `events.jsonl` holds it, read back as `f64`: `serde_json` writes the shortest
+/// decimal that reads back as `x`, and a reader parses that as `f64`. A non-finite `x` (written
+/// as `null`, so never in a note that decoded) stays as it is.
+fn recorded_f64(x: f32) -> f64 {
+    serde_json::to_string(&x)
+        .ok()
+        .and_then(|s| serde_json::from_str::<f64>(&s).ok())
+        .unwrap_or(f64::from(x))
 }
 
 /// Conflicts in flown positions: pairs of vehicles (both active) that held the same grid
@@ -64,8 +83,8 @@ pub fn min_separation(run: &Records) -> Option<f64> {
     for rows in &run.ticks {
         for (a, ra) in rows.iter().enumerate() {
             for rb in &rows[a + 1..] {
-                let d = ((ra.x - rb.x).powi(2) + (ra.y - rb.y).powi(2) + (ra.z - rb.z).powi(2))
-                    .sqrt();
+                let d =
+                    ((ra.x - rb.x).powi(2) + (ra.y - rb.y).powi(2) + (ra.z - rb.z).powi(2)).sqrt();
                 best = Some(best.map_or(d, |b: f64| b.min(d)));
             }
         }
@@ -107,45 +126,55 @@ pub fn plan_ms(cfg: &Config, p: &PlannerParams) -> (Vec<f64>, Option<f64>) {
 
 /// The `planner` section.
 pub fn metrics(cfg: &Config, p: &PlannerParams, run: &Records) -> Vec<(&'static str, Value)> {
-    let mut plans: BTreeMap<u64, Vec<&Value>> = BTreeMap::new();
+    let mut plans: BTreeMap<u32, Vec<Planned>> = BTreeMap::new();
     let mut no_route = 0u64;
     let mut hovers = 0u64;
-    for e in run.events_of("note") {
-        let n = &e["note"];
-        if let Some(pl) = n.get("planned") {
-            plans.entry(u64_of(&pl["plan"])).or_default().push(pl);
-        } else if n.get("no_route").is_some() {
-            no_route += 1;
-        } else if n.get("hover").is_some() {
-            hovers += 1;
+    for (_, _, note) in behaviour_notes::<PlanNote>(run) {
+        match note {
+            PlanNote::Planned {
+                plan,
+                vehicle,
+                start_slot,
+                moves,
+                cost,
+                expansions,
+            } => plans.entry(plan).or_default().push(Planned {
+                plan,
+                vehicle,
+                start_slot,
+                moves,
+                cost: recorded_f64(cost),
+                expansions,
+            }),
+            PlanNote::NoRoute { .. } => no_route += 1,
+            PlanNote::Hover { .. } => hovers += 1,
+            PlanNote::Flying { .. } | PlanNote::Arrived => {}
         }
     }
     let routes: Vec<Value> = plans
         .values()
         .flatten()
         .map(|pl| {
-            json!({"plan": pl["plan"], "vehicle": pl["vehicle"], "start_slot": pl["start_slot"],
-                   "moves": pl["moves"], "cost": pl["cost"], "expansions": pl["expansions"]})
+            json!({"plan": pl.plan, "vehicle": pl.vehicle, "start_slot": pl.start_slot,
+                   "moves": pl.moves, "cost": pl.cost, "expansions": pl.expansions})
         })
         .collect();
     let first = plans.values().next();
-    let sum = |key: &str| -> f64 {
-        first.map_or(0.0, |v| v.iter().filter_map(|pl| pl[key].as_f64()).sum())
-    };
+    let sum = |of: fn(&Planned) -> f64| first.map_or(0.0, |v| v.iter().map(of).sum());
     let (per_route, total) = plan_ms(cfg, p);
-    let reached = run.events_of("reached").count();
+    let reached = run.reached().count();
     let all = json!({
         "plans": plans.len(),
         "replans": plans.len().saturating_sub(1),
         "routes": routes,
-        "route_cost": sum("cost"),
-        "expansions": sum("expansions"),
+        "route_cost": sum(|pl| pl.cost),
+        "expansions": sum(|pl| f64::from(pl.expansions)),
         "no_route": no_route,
         "hovers": hovers,
         "conflicts": flown_conflicts(cfg, p, run),
         "min_separation": min_separation(run),
         "reached": reached,
-        "collisions": run.events_of("collision").count(),
+        "collisions": run.collisions().count(),
         "plan_ms": {"total": total, "per_route": per_route},
     });
     vec![("planner", all)]
