@@ -27,6 +27,7 @@ use super::{
     progress, write_json,
 };
 use swarmrt_analysis::plot::bench::{Legend, Panel, Series, write_figure};
+use swarmrt_orchestrator::config::load_config;
 use swarmrt_orchestrator::error::{SwarmError, SwarmResult};
 use swarmrt_orchestrator::{processes, run_dir};
 
@@ -184,7 +185,7 @@ pub struct SwarmReport {
 /// The scenario at `n` robots: `base` with the count, the tick budget, no early stop, and a
 /// square map around the start grid big enough for the start layout and the goal slots.
 pub fn scenario(base: &Path, n: u32, ticks: u64) -> SwarmResult<Config> {
-    let cfg = Config::load(base, &[])?;
+    let cfg = load_config(base, &[])?;
     let spacing = cfg.robots.start.spacing;
     let r_start = (n as f64 / std::f64::consts::PI).sqrt() * spacing + 1.0;
     let side = (2.0 * r_start + 6.0).max(12.0).ceil();
@@ -200,7 +201,7 @@ pub fn scenario(base: &Path, n: u32, ticks: u64) -> SwarmResult<Config> {
         format!("map.goal.x={goal:.1}"),
         format!("map.goal.y={goal:.1}"),
     ];
-    Ok(swarmrt_harness::load_config(base, &set)?)
+    load_config(base, &set)
 }
 
 fn validate(args: &SwarmOptions) -> SwarmResult<()> {

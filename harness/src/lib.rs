@@ -1,14 +1,15 @@
 //! The world and robot cores called directly, in one process, in exactly the order the
 //! process shells call them (after raft-rs's `harness/`): one lock-step loop for every
 //! in-process caller (`swarm run --in-process`, sweeps, benchmarks), the Raft and radio test
-//! networks, the fuzz drivers, and the full config loader the callers share.
+//! networks, the fuzz drivers, and the one config loader every command shares.
 //!
 //! - [`lockstep`]: the tick loop (faults' restarts, observe, every running robot's step, the
 //!   world's step).
 //! - [`raft_net`]: Raft cores alone in an in-memory network with cut links.
 //! - [`fuzz`]: real agents over the world's radio medium with crashes, restarts and
 //!   partitions, checked every tick (`swarm fuzz`).
-//! - [`load_config`]: a scenario as a run needs it.
+//! - [`config`]: [`config::load_run_config`], a scenario file and its `--set` as a run needs
+//!   them (schema and bounds, `[behaviour]`, map and start layout, robot programs).
 //!
 //! ```
 //! use swarmrt_harness::lockstep::Lockstep;
@@ -32,24 +33,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod config;
 pub mod fuzz;
 pub mod lockstep;
 pub mod raft_net;
-
-use std::path::Path;
-
-use swarmrt_scenario::{Config, ConfigError};
-use swarmrt_world::World;
-
-/// Loads a config as a run needs it: the file with `--set` overrides, the `[behaviour]`
-/// parameters resolved by the behaviour that owns them, and the map and start layout built
-/// once, so a bad obstacle or a crowded start is a user error before anything starts.
-pub fn load_config(path: &Path, set: &[String]) -> Result<Config, ConfigError> {
-    let cfg = swarmrt_agent::registry::load(path, set)?;
-    World::new(&cfg, swarmrt_agent::registry::VOCABULARY).map_err(|e| ConfigError {
-        file: path.display().to_string(),
-        key: e.key,
-        message: e.message,
-    })?;
-    Ok(cfg)
-}

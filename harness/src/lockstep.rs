@@ -27,7 +27,8 @@ pub struct Lockstep {
 }
 
 impl Lockstep {
-    /// The scenario at tick 0 (its `[behaviour]` resolved, e.g. by [`crate::load_config`]).
+    /// The scenario at tick 0 (its `[behaviour]` resolved, e.g. by
+    /// [`crate::config::load_run_config`]).
     pub fn new(cfg: &Config) -> Result<Lockstep, MapError> {
         let world = World::new(cfg, swarmrt_agent::registry::VOCABULARY)?;
         let n = cfg.robots.count as usize;

@@ -1,5 +1,5 @@
-//! Loading a scenario for the CLI: [`swarmrt_harness::load_config`] with its errors as the
-//! CLI reports them (one line, exit 2).
+//! A scenario for the CLI: [`swarmrt_harness::config::load_run_config`] from the current
+//! directory, its error a user error (one line, exit 2).
 
 use std::path::Path;
 
@@ -7,13 +7,11 @@ use swarmrt_scenario::Config;
 
 use crate::error::SwarmResult;
 
-/// Loads and validates a config, applying `--set` overrides. Robot programs
-/// (`robots.program`) must be runnable from here, and become absolute paths.
+/// [`swarmrt_harness::config::load_run_config`] with robot programs found from the current
+/// directory; a bad config is a [`crate::error::SwarmError::User`].
 pub fn load_config(path: &Path, set: &[String]) -> SwarmResult<Config> {
-    let mut cfg = swarmrt_harness::load_config(path, set)?;
-    let cwd = std::env::current_dir().map_err(anyhow::Error::from)?;
-    swarmrt_scenario::program::resolve(&mut cfg, &path.display().to_string(), &cwd)?;
-    Ok(cfg)
+    let cwd = std::env::current_dir()?;
+    Ok(swarmrt_harness::config::load_run_config(path, set, &cwd)?)
 }
 
 /// Refuses a config whose robots include another program than the built-in one for a mode

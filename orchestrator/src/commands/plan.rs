@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use serde_json::json;
 use swarmrt_agent::behaviours::planner::{PlannerParams, metrics, scene};
+use swarmrt_scenario::ConfigError;
 
 use crate::cli::PlanArgs;
 use crate::config::load_config;
@@ -21,9 +22,9 @@ pub fn plan(args: &PlanArgs) -> SwarmResult<()> {
             cfg.behaviour.kind
         )));
     }
-    let params: PlannerParams = toml::Value::Table(cfg.behaviour.params.clone())
-        .try_into()
-        .map_err(|e| SwarmError::User(format!("{}: [behaviour]: {e}", args.config.display())))?;
+    let params = PlannerParams::of(&cfg).map_err(|(key, message)| {
+        ConfigError::new(&args.config.display().to_string(), key, message)
+    })?;
     let t0 = Instant::now();
     let planned = scene::plan_scenario(&cfg, &params)
         .map_err(|e| SwarmError::User(format!("{}: {e}", args.config.display())))?;
