@@ -40,10 +40,6 @@ pub fn profile_dir() -> PathBuf {
         .to_path_buf()
 }
 
-fn release() -> bool {
-    profile_dir().file_name().is_some_and(|n| n == "release")
-}
-
 /// `bindings/c/include`: `swarmrt.h` and the generated `swarmrt_messages.h`.
 pub fn include_dir() -> PathBuf {
     workspace().join("bindings/c/include")
@@ -77,21 +73,13 @@ pub fn cc() -> &'static str {
     }
 }
 
-/// `libswarmrt.a`, built once per test process with the tests' profile (a nested `cargo
-/// build`, as [`crate::bin_dir`] does for the binaries).
+/// `libswarmrt.a`, built with the binaries by [`crate::bin_dir`] (the test build's own
+/// features: a `cargo build -p swarmrt-c` of its own resolved others and recompiled its
+/// dependencies, ~45 s of `c_api` on a fresh clone).
 pub fn staticlib() -> &'static Path {
     static LIB: OnceLock<PathBuf> = OnceLock::new();
     LIB.get_or_init(|| {
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
-        let mut cmd = Command::new(cargo);
-        cmd.current_dir(workspace())
-            .args(["build", "--quiet", "-p", "swarmrt-c", "--lib"]);
-        if release() {
-            cmd.arg("--release");
-        }
-        let status = cmd.status().expect("cargo build runs");
-        assert!(status.success(), "building libswarmrt.a (swarmrt-c) failed");
-        let lib = profile_dir().join("libswarmrt.a");
+        let lib = crate::bin_dir().join("libswarmrt.a");
         assert!(lib.exists(), "{} was not built", lib.display());
         lib
     })

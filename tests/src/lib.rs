@@ -20,9 +20,9 @@ pub fn workspace() -> PathBuf {
         .to_path_buf()
 }
 
-/// Directory holding `swarm`, `swarm-world`, `swarm-agent` and `swarm-bench`, built once per
-/// test process with the same profile as the tests (cargo only builds a package's own
-/// binaries for its tests, and these live in other packages).
+/// Directory holding `swarm`, `swarm-world`, `swarm-agent`, `swarm-bench` and the C robots'
+/// `libswarmrt.a`, built once per test process with the same profile as the tests (cargo only
+/// builds a package's own binaries for its tests, and these live in other packages).
 ///
 /// They are built as `cargo test --workspace` builds them: with the dev-dependencies' features
 /// (the robot's test hooks among them). A plain `cargo build -p ...` resolved features without
@@ -37,8 +37,14 @@ pub fn bin_dir() -> &'static Path {
         let release = profile_dir.file_name().is_some_and(|n| n == "release");
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
         let mut cmd = Command::new(cargo);
-        cmd.current_dir(workspace())
-            .args(["build", "--quiet", "--workspace", "--bins", "--tests"]);
+        cmd.current_dir(workspace()).args([
+            "build",
+            "--quiet",
+            "--workspace",
+            "--lib",
+            "--bins",
+            "--tests",
+        ]);
         if release {
             cmd.arg("--release");
         }
