@@ -14,7 +14,7 @@ const MARKER_COLOUR = {
   collision: '#d73a49', died: '#222', fault: '#e36209', radio: '#8250df',
   rejected: '#8a4600', reached: '#2da44e', notes: '#1f6feb',
 };
-const LANE_COLOUR = { follower: '#e8e8e8', pre_candidate: '#f6e27a', candidate: '#f0a020', leader: '#d73a49' };
+const LANE_COLOUR = { follower: '#e8e8e8', pre_candidate: '#f6e27a', candidate: '#f0a020', leader: '#d73a49', dead: '#555' };
 const OUTCOME_DELIVERED = 0;
 const CACHE_LIMIT = 256 << 20; // bytes of frame chunks kept in memory
 
@@ -513,7 +513,11 @@ function drawLanes() {
     }
   };
   let commit = 0, commitPath = [[t0, 0]];
-  for (const p of V.lanes) {
+  // A robot's lane ends at its death: a dead leader is no leader (deaths merged in tick order).
+  const deaths = V.markers.filter((m) => m.kind === 'died')
+    .flatMap((m) => m.robots.map((robot) => ({ tick: m.tick, robot, role: 'dead' })));
+  const points = V.lanes.concat(deaths).sort((a, b) => a.tick - b.tick);
+  for (const p of points) {
     if (p.robot >= n) continue;
     const s = state[p.robot];
     if (p.role != null || p.term != null) {
