@@ -6,9 +6,9 @@
 //! - [`wire`]: the messages on the link and their bytes.
 //! - [`link`]: Zenoh sessions, key expressions, the handshake's layout hash.
 //! - [`world_side`]: the world's end of the link.
-//! - [`host`]: the `swarm-host` process.
+//!
+//! The `swarm-host` process itself is `swarmrt_runtime::host`, beside the other process shells.
 
-pub mod host;
 pub mod hosts_file;
 pub mod link;
 pub mod wire;

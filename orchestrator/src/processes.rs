@@ -6,10 +6,12 @@
 //! small reaper per child (`waitpid` on exactly that child, so iceoryx2 never sees zombies)
 //! and the Ctrl-C relay. No polling.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
-use std::process::{ChildStdin, Stdio};
+use std::process::{ChildStdin, ChildStdout, Stdio};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
@@ -20,6 +22,8 @@ use swarmrt_scenario::Config;
 
 use crate::hosts::{HostMsg, Remotes, RunHosts};
 use swarmrt_ipc::cleanup;
+use swarmrt_runtime::supervisor::launch::{self, Launch};
+use swarmrt_runtime::supervisor::{Order, Pid, Reaped, Supervisor};
 pub use swarmrt_scenario::process::{child_command, describe, signal_all};
 
 /// How long robots get to exit on the world's shutdown sample before they are sent SIGTERM
@@ -112,65 +116,38 @@ pub fn sibling_binary(name: &str) -> anyhow::Result<PathBuf> {
     )
 }
 
-/// Reaps one child: a small thread blocked in `waitpid(pid)`, so iceoryx2 never sees a zombie
-/// and a run never reaps a process that is not its own (an orchestrator may run several runs,
-/// as `swarm bench swarm` does, or have other children).
-///
-/// With `after`, the exit is reported only once that channel's senders are gone (or
-/// [`LAUNCHER_EOF_WAIT`] later): a host launcher's stdout reader holds one, so the host's last
-/// report (`Done`) is on the channel before its exit. Without it, the exit of a launcher that
-/// finished could be judged first and the host called lost (`multihost::three_hosts...`,
-/// 1 run in ~10).
-fn reap(pid: i32, tx: Sender<Msg>, after: Option<Receiver<()>>) -> std::io::Result<()> {
-    std::thread::Builder::new()
-        .name(format!("reap-{pid}"))
-        .stack_size(64 * 1024)
-        .spawn(move || {
-            loop {
-                let mut status = 0;
-                // SAFETY: waitpid on our own child, writing only `status`.
-                let r = unsafe { libc::waitpid(pid, &mut status, 0) };
-                let how = if r == pid {
-                    describe(status)
-                } else if std::io::Error::last_os_error().raw_os_error() == Some(libc::EINTR) {
-                    continue;
-                } else {
-                    format!(
-                        "could not be waited for: {}",
-                        std::io::Error::last_os_error()
-                    )
-                };
-                if let Some(after) = &after {
-                    let _ = after.recv_timeout(LAUNCHER_EOF_WAIT);
-                }
-                let _ = tx.send(Msg::Exited { pid, how });
-                return;
+/// The reaper's report of `pid`'s end, as a message on `tx`.
+fn exited(tx: &Sender<Msg>) -> impl FnOnce(Pid, String) + Send + 'static {
+    let tx = tx.clone();
+    move |pid, how| {
+        let _ = tx.send(Msg::Exited { pid, how });
+    }
+}
+
+/// Handles a message while the run's processes are seen out: exits are reaped (a launcher's
+/// end is only logged), host reports recorded, a Ctrl-C kills everything at once.
+fn seeing_out(
+    sup: &mut Supervisor,
+    m: Msg,
+    remotes: Option<&mut Remotes>,
+    remote_started: &mut RemoteStarts,
+    remote_ended: &mut RemoteEnds,
+) {
+    match m {
+        Msg::Exited { pid, how } => {
+            if let Reaped::Other { pid, how } = sup.reaped(pid, &how) {
+                tracing::debug!(pid, how, "process ended");
             }
-        })
-        .map(|_| ())
-}
-
-/// Starts a robot's reaper; if even that fails, the robot is killed and reaped here so it
-/// cannot outlive the run unseen.
-fn reap_robot(pid: i32, tx: &Sender<Msg>) -> std::io::Result<()> {
-    reap(pid, tx.clone(), None).inspect_err(|_| {
-        signal_all(&[pid], libc::SIGKILL);
-        let mut status = 0;
-        // SAFETY: as in `reap`; the child was just sent SIGKILL, so this returns promptly.
-        unsafe { libc::waitpid(pid, &mut status, 0) };
-    })
-}
-
-/// The process currently running `robot`: after a restart the old one may not be reaped yet.
-fn live_pid(
-    robots: &BTreeMap<i32, u32>,
-    scheduled_kills: &BTreeSet<i32>,
-    robot: u32,
-) -> Option<i32> {
-    robots
-        .iter()
-        .find(|(pid, id)| **id == robot && !scheduled_kills.contains(pid))
-        .map(|(&pid, _)| pid)
+        }
+        Msg::Interrupt => launch::send(&sup.kill_all()),
+        Msg::Host(host, HostMsg::Report(report)) => {
+            if let Some(r) = remotes {
+                r.note(host, &report);
+                record_remote(host, &report, remote_started, remote_ended);
+            }
+        }
+        _ => {}
+    }
 }
 
 fn send_control(stdin: &mut Option<ChildStdin>, c: &Control) {
@@ -226,6 +203,8 @@ pub fn run_on_hosts(
     })
 }
 
+/// The run's phases: the world starts and listens, the remote hosts and this host's robots
+/// start, the world's reports drive the run until its end, then everything is seen out.
 fn supervise(
     cfg: &Config,
     config_path: &Path,
@@ -235,7 +214,6 @@ fn supervise(
     interrupt: Receiver<()>,
     progress: &mut impl FnMut(u64),
 ) -> anyhow::Result<ProcessOutcome> {
-    let hosts = opts.hosts;
     let world_bin = sibling_binary("swarm-world")?;
     let agent_bin = sibling_binary("swarm-agent")?;
     // iceoryx2's tools read `config/iceoryx2.toml` from their working directory, so
@@ -243,503 +221,578 @@ fn supervise(
     let ipc_config = dir.join(crate::run_dir::IPC_CONFIG);
     swarmrt_ipc::write_config_file(run, &ipc_config)
         .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", ipc_config.display()))?;
-    let n = cfg.robots.count;
-    let mut outcome = ProcessOutcome::default();
     let (tx, rx) = crossbeam_channel::unbounded::<Msg>();
-
-    let interrupted_flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     // Dropped when this function returns: the relay thread ends with the run, so it never
     // swallows a Ctrl-C meant for a later run in the same process.
-    let (_run_over, run_over) = crossbeam_channel::bounded::<()>(0);
-    {
-        let tx = tx.clone();
-        let flag = interrupted_flag.clone();
-        std::thread::spawn(move || {
-            loop {
-                crossbeam_channel::select! {
-                    recv(interrupt) -> r => {
-                        if r.is_err() {
-                            return;
-                        }
-                        flag.store(true, std::sync::atomic::Ordering::SeqCst);
-                        if tx.send(Msg::Interrupt).is_err() {
-                            return;
-                        }
-                    }
-                    recv(run_over) -> _ => return,
-                }
-            }
-        });
-    }
+    let (_run_over, interrupted) = relay_interrupts(interrupt, &tx);
+    let (world_pid, world_stdin) = start_world(&world_bin, run, config_path, dir, opts, &tx)?;
+    let launch = Launch {
+        agent: agent_bin,
+        run: run.clone(),
+        config: config_path.to_path_buf(),
+        // Stable storage of the robots' persistent Raft state, for restarts.
+        storage: dir.join(crate::run_dir::STORAGE_DIR),
+        first: 0,
+        cfg: cfg.clone(),
+        ipc_config,
+        quiet: false,
+    };
+    let mut local = LocalRun::new(launch, tx, rx, world_pid, world_stdin);
 
-    let mut world_cmd = child_command(&world_bin);
+    // Robots start once the world's services exist.
+    if !local.await_listening()? {
+        return Ok(local.outcome);
+    }
+    // Remote hosts start now too: the world's Zenoh session is listening.
+    local.launch_remotes(opts.hosts, run.run_id(), config_path)?;
+    local.start_robots(cfg.robots.count, &interrupted);
+
+    // Supervise until the world reports the end. The world's exit (from the reaper) and its
+    // last report (from the stdout reader) race on the channel, so its end is judged only
+    // once both its exit and the EOF of its stdout have arrived.
+    while !local.done {
+        let msg = local.rx.recv()?;
+        local.handle(msg, progress);
+    }
+    local.finish(run.run_id())
+}
+
+/// Relays Ctrl-C from `interrupt` to `tx` and raises the returned flag, until the returned
+/// sender is dropped.
+fn relay_interrupts(interrupt: Receiver<()>, tx: &Sender<Msg>) -> (Sender<()>, Arc<AtomicBool>) {
+    let interrupted_flag = Arc::new(AtomicBool::new(false));
+    let (run_over_tx, run_over) = crossbeam_channel::bounded::<()>(0);
+    let tx = tx.clone();
+    let flag = interrupted_flag.clone();
+    std::thread::spawn(move || {
+        loop {
+            crossbeam_channel::select! {
+                recv(interrupt) -> r => {
+                    if r.is_err() {
+                        return;
+                    }
+                    flag.store(true, Ordering::SeqCst);
+                    if tx.send(Msg::Interrupt).is_err() {
+                        return;
+                    }
+                }
+                recv(run_over) -> _ => return,
+            }
+        }
+    });
+    (run_over_tx, interrupted_flag)
+}
+
+/// The `swarm-world` command of this run.
+fn world_command(
+    world_bin: &Path,
+    run: &RunServices,
+    config_path: &Path,
+    dir: &Path,
+    opts: &RunOptions,
+) -> std::process::Command {
+    let mut world_cmd = child_command(world_bin);
     world_cmd
         .args(["--run-id", run.run_id(), "--config"])
         .arg(config_path)
         .arg("--out")
         .arg(dir);
-    if let Some(h) = hosts {
+    if let Some(h) = opts.hosts {
         world_cmd.arg("--hosts").arg(&h.path);
     }
     if opts.realtime {
         world_cmd.arg("--realtime");
     }
-    let mut world = world_cmd
+    world_cmd
+}
+
+/// Starts `swarm-world` with its stdout reader and its reaper, both reporting on `tx`;
+/// returns its pid and stdin (its controls).
+fn start_world(
+    world_bin: &Path,
+    run: &RunServices,
+    config_path: &Path,
+    dir: &Path,
+    opts: &RunOptions,
+    tx: &Sender<Msg>,
+) -> anyhow::Result<(Pid, Option<ChildStdin>)> {
+    let mut world = world_command(world_bin, run, config_path, dir, opts)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .spawn()
         .with_context(|| format!("cannot start {}", world_bin.display()))?;
     let world_pid = world.id() as i32;
-    let mut world_stdin = world.stdin.take();
+    let world_stdin = world.stdin.take();
     let world_stdout = world.stdout.take().context("world stdout")?;
-    {
-        let tx = tx.clone();
-        std::thread::spawn(move || {
-            for line in BufReader::new(world_stdout).lines() {
-                let Ok(line) = line else { break };
-                match serde_json::from_str::<WorldReport>(&line) {
-                    Ok(r) => {
-                        if tx.send(Msg::Report(r)).is_err() {
-                            return;
-                        }
-                    }
-                    Err(_) => tracing::warn!("world said: {line}"),
-                }
-            }
-            let _ = tx.send(Msg::WorldEof);
-        });
-    }
-    if let Err(e) = reap(world_pid, tx.clone(), None) {
+    read_world_reports(world_stdout, tx);
+    if let Err(e) = launch::reap(world_pid, None, exited(tx)) {
         signal_all(&[world_pid], libc::SIGKILL);
         let _ = world.wait();
         bail!("cannot watch the world process: {e}");
     }
+    Ok((world_pid, world_stdin))
+}
 
-    // Robots start once the world's services exist.
-    let mut world_alive = true;
-    let mut listening = false;
-    while !listening {
-        match rx.recv()? {
-            Msg::Report(WorldReport::Listening) => listening = true,
-            Msg::Report(r) => tracing::debug!(?r, "early report"),
-            Msg::WorldEof => {}
-            Msg::Exited { pid, how } if pid == world_pid => {
-                bail!(
-                    "the world process failed before the run started ({how}); see its error above"
-                )
-            }
-            Msg::Exited { .. } | Msg::Host(..) => {}
-            Msg::Interrupt => {
-                signal_all(&[world_pid], libc::SIGTERM);
-                outcome.interrupted = true;
-                wait_for_exit(
-                    &rx,
-                    &[world_pid],
-                    &mut BTreeMap::new(),
-                    Duration::ZERO,
-                    |_| {},
-                );
-                return Ok(outcome);
+/// The world's stdout reader: each report line as a message on `tx`, then its EOF.
+fn read_world_reports(world_stdout: ChildStdout, tx: &Sender<Msg>) {
+    let tx = tx.clone();
+    std::thread::spawn(move || {
+        for line in BufReader::new(world_stdout).lines() {
+            let Ok(line) = line else { break };
+            match serde_json::from_str::<WorldReport>(&line) {
+                Ok(r) => {
+                    if tx.send(Msg::Report(r)).is_err() {
+                        return;
+                    }
+                }
+                Err(_) => tracing::warn!("world said: {line}"),
             }
         }
+        let _ = tx.send(Msg::WorldEof);
+    });
+}
+
+/// Handles a message while processes are seen out before any robot started: exits are reaped.
+fn just_reap(sup: &mut Supervisor, m: Msg) {
+    if let Msg::Exited { pid, how } = m {
+        sup.reaped(pid, &how);
     }
-    // Remote hosts start now too: the world's Zenoh session is listening.
-    let mut remotes = match hosts {
-        None => None,
-        Some(h) => {
-            match Remotes::launch(
-                &h.file,
-                run.run_id(),
-                config_path,
-                &tx,
-                Msg::Host,
-                |pid, eof| reap(pid, tx.clone(), Some(eof)),
-            ) {
-                Ok(r) => Some(r),
-                Err(e) => {
-                    send_control(&mut world_stdin, &Control::Stop);
-                    wait_for_exit(
-                        &rx,
-                        &[world_pid],
-                        &mut BTreeMap::new(),
-                        SHUTDOWN_GRACE,
-                        |_| {},
+}
+
+/// One multi-process run as `supervise` drives it through its phases: the run's processes
+/// (the world's, this host's robots', the remote hosts' launchers) and what was learned.
+struct LocalRun {
+    /// Every process of the run, robots and the others, in one table.
+    sup: Supervisor,
+    launch: Launch,
+    tx: Sender<Msg>,
+    rx: Receiver<Msg>,
+    world_pid: Pid,
+    /// The world's controls; `None` once it cannot be written to.
+    world_stdin: Option<ChildStdin>,
+    outcome: ProcessOutcome,
+    remotes: Option<Remotes>,
+    /// Remote robot processes: (host, pid) -> (robot, incarnation), and how each ended.
+    remote_started: RemoteStarts,
+    remote_ended: RemoteEnds,
+    /// The main loop is over: the world reported the end, failed, or a host failed.
+    done: bool,
+    /// The world's stdout has ended.
+    world_eof: bool,
+    /// How the world's process ended, once reaped.
+    world_exit: Option<String>,
+    /// False once the world's process was reaped (the run's end then has no grace).
+    world_alive: bool,
+    /// The world reported tick 0.
+    ready: bool,
+    /// Ctrl-Cs seen by the main loop.
+    interrupts: u32,
+    /// A host that failed before tick 0 fails the run.
+    startup_failure: Option<crate::hosts::HostFailure>,
+}
+
+impl LocalRun {
+    /// A run whose world runs as `world_pid` (watched with the rest).
+    fn new(
+        launch: Launch,
+        tx: Sender<Msg>,
+        rx: Receiver<Msg>,
+        world_pid: Pid,
+        world_stdin: Option<ChildStdin>,
+    ) -> LocalRun {
+        let mut sup = Supervisor::new();
+        sup.watch(world_pid);
+        LocalRun {
+            sup,
+            launch,
+            tx,
+            rx,
+            world_pid,
+            world_stdin,
+            outcome: ProcessOutcome::default(),
+            remotes: None,
+            remote_started: Vec::new(),
+            remote_ended: BTreeMap::new(),
+            done: false,
+            world_eof: false,
+            world_exit: None,
+            world_alive: true,
+            ready: false,
+            interrupts: 0,
+            startup_failure: None,
+        }
+    }
+
+    /// Waits for the world to listen. `false` when a Ctrl-C came first: the world was
+    /// stopped and seen out, and the run is over.
+    fn await_listening(&mut self) -> anyhow::Result<bool> {
+        loop {
+            match self.rx.recv()? {
+                Msg::Report(WorldReport::Listening) => return Ok(true),
+                Msg::Report(r) => tracing::debug!(?r, "early report"),
+                Msg::WorldEof => {}
+                Msg::Exited { pid, how } if pid == self.world_pid => {
+                    bail!(
+                        "the world process failed before the run started ({how}); see its error above"
+                    )
+                }
+                Msg::Exited { .. } | Msg::Host(..) => {}
+                Msg::Interrupt => {
+                    signal_all(&[self.world_pid], libc::SIGTERM);
+                    self.outcome.interrupted = true;
+                    launch::see_out(
+                        &mut self.sup,
+                        &self.rx,
+                        Duration::ZERO,
+                        EXIT_GRACE,
+                        just_reap,
                     );
-                    return Err(e);
+                    return Ok(false);
                 }
             }
         }
-    };
-    // Stable storage of the robots' persistent Raft state, for restarts (`consensus.storage`).
-    let storage = dir.join(crate::run_dir::STORAGE_DIR);
-    let spawn_robot = |id: u32, incarnation: u32| {
-        // A robot program gets swarm-agent's arguments after its own, and the run's names
-        // in its environment (docs/robot-interface.md).
-        let mut cmd = match swarmrt_scenario::program::program_of(cfg, id) {
-            None => child_command(&agent_bin),
-            Some((_, argv)) => {
-                let mut c = child_command(Path::new(&argv[0]));
-                c.args(&argv[1..]);
-                c
-            }
-        };
-        cmd.envs(run.robot_env(id, incarnation, config_path, &storage, 0, &ipc_config))
-            .args([
-                "--run-id",
-                run.run_id(),
-                "--robot",
-                &id.to_string(),
-                "--incarnation",
-                &incarnation.to_string(),
-                "--config",
-            ])
-            .arg(config_path)
-            .arg("--storage")
-            .arg(&storage)
-            .stdin(Stdio::null())
-            .spawn()
-            .and_then(|c| reap_robot(c.id() as i32, &tx).map(|()| c))
-    };
-    let mut robots: BTreeMap<i32, u32> = BTreeMap::new();
-    // (pid, robot, incarnation) of every robot process, and how each ended.
-    let mut started: Vec<(i32, u32, u32)> = Vec::new();
-    let mut ended: BTreeMap<i32, String> = BTreeMap::new();
-    for id in 0..n {
-        if remotes.as_ref().is_some_and(|r| r.host_of(id).is_some()) {
-            continue;
-        }
-        if interrupted_flag.load(std::sync::atomic::Ordering::SeqCst) {
-            // Ctrl-C during start-up: start no more robots; the main loop stops the world.
-            break;
-        }
-        match spawn_robot(id, 0) {
-            Ok(c) => {
-                robots.insert(c.id() as i32, id);
-                started.push((c.id() as i32, id, 0));
+    }
+
+    /// Starts the remote hosts (`--hosts` runs) and watches their launchers; if that fails,
+    /// the world is stopped and seen out and the run fails.
+    fn launch_remotes(
+        &mut self,
+        hosts: Option<&RunHosts>,
+        run_id: &str,
+        config_path: &Path,
+    ) -> anyhow::Result<()> {
+        let Some(h) = hosts else { return Ok(()) };
+        let tx = &self.tx;
+        let watch = |pid, eof| launch::reap(pid, Some((eof, LAUNCHER_EOF_WAIT)), exited(tx));
+        match Remotes::launch(&h.file, run_id, config_path, tx, Msg::Host, watch) {
+            Ok(r) => {
+                r.pids().into_iter().for_each(|pid| self.sup.watch(pid));
+                self.remotes = Some(r);
+                Ok(())
             }
             Err(e) => {
-                tracing::error!(robot = id, "cannot start robot: {e}");
-                outcome
-                    .unscheduled_deaths
-                    .insert(id, format!("failed to start: {e}"));
-                send_control(
-                    &mut world_stdin,
-                    &Control::RobotDied {
-                        robot: id,
-                        reason: "failed to start".to_string(),
-                    },
+                send_control(&mut self.world_stdin, &Control::Stop);
+                launch::see_out(
+                    &mut self.sup,
+                    &self.rx,
+                    SHUTDOWN_GRACE,
+                    EXIT_GRACE,
+                    just_reap,
                 );
+                Err(e)
             }
         }
     }
 
-    // Supervise until the world reports the end. The world's exit (from the reaper) and its
-    // last report (from the stdout reader) race on the channel, so its end is judged only
-    // once both its exit and the EOF of its stdout have arrived.
-    let mut done = false;
-    let mut world_eof = false;
-    let mut world_exit: Option<String> = None;
-    let mut interrupts = 0;
-    // Processes the fault schedule killed (for a kill or a restart): their end is no death.
-    let mut scheduled_kills: BTreeSet<i32> = BTreeSet::new();
-    // Processes the fault schedule stopped; they get SIGCONT before any shutdown.
-    let mut frozen: BTreeSet<i32> = BTreeSet::new();
-    // Remote robot processes: (host, pid) -> (robot, incarnation), and how each ended.
-    let mut remote_started: RemoteStarts = Vec::new();
-    let mut remote_ended: RemoteEnds = BTreeMap::new();
-    let mut ready = false;
-    // A host that failed before tick 0 fails the run.
-    let mut startup_failure: Option<crate::hosts::HostFailure> = None;
-    while !done {
-        let msg = rx.recv()?;
-        // A fault or a death of a robot on a remote host: ordered through its swarm-host.
-        if let (Some(r), Msg::Report(report)) = (remotes.as_mut(), &msg)
-            && let Some((robot, order)) = remote_order(report)
-            && let Some(host) = r.host_of(robot)
-        {
-            if let WorldReport::Unresponsive { waited_ms, .. } = report {
-                outcome.unscheduled_deaths.insert(
-                    robot,
-                    format!("unresponsive for {waited_ms} ms (on host {})", r.name(host)),
-                );
+    /// Starts the first process of each of the `n` robots not on a remote host, in id order.
+    fn start_robots(&mut self, n: u32, interrupted: &AtomicBool) {
+        for id in 0..n {
+            if self
+                .remotes
+                .as_ref()
+                .is_some_and(|r| r.host_of(id).is_some())
+            {
+                continue;
             }
-            r.order(host, &order);
-            continue;
+            if interrupted.load(Ordering::SeqCst) {
+                // Ctrl-C during start-up: start no more robots; the main loop stops the world.
+                break;
+            }
+            let Some(Order::Spawn { robot, incarnation }) = self.sup.spawn(id) else {
+                break;
+            };
+            if let Err(e) = self.start_robot(robot, incarnation) {
+                tracing::error!(robot = id, "cannot start robot: {e}");
+                self.not_started(id, format!("failed to start: {e}"), "failed to start");
+            }
+        }
+    }
+
+    /// Starts `robot`'s process of `incarnation` and tells the supervisor.
+    fn start_robot(&mut self, robot: u32, incarnation: u32) -> std::io::Result<()> {
+        let pid = launch::spawn(&self.launch, robot, incarnation, exited(&self.tx))?;
+        self.sup.started(robot, incarnation, pid);
+        Ok(())
+    }
+
+    /// A robot process could not be started: an unscheduled death (`death`), and the world
+    /// is told the robot died (`reason`).
+    fn not_started(&mut self, robot: u32, death: String, reason: &str) {
+        self.outcome.unscheduled_deaths.insert(robot, death);
+        send_control(
+            &mut self.world_stdin,
+            &Control::RobotDied {
+                robot,
+                reason: reason.to_string(),
+            },
+        );
+    }
+
+    /// One message of the main loop; then whether the run must end.
+    fn handle(&mut self, msg: Msg, progress: &mut impl FnMut(u64)) {
+        if let Msg::Report(report) = &msg
+            && self.order_remote(report)
+        {
+            return;
         }
         match msg {
             Msg::Report(WorldReport::Ready { startup_ms }) => {
-                ready = true;
-                outcome.startup_ms = Some(startup_ms);
+                self.ready = true;
+                self.outcome.startup_ms = Some(startup_ms);
             }
             Msg::Report(WorldReport::Tick { tick }) => progress(tick),
+            // The schedule's faults: the world counts a killed robot dead already; the real
+            // signal exercises the crash path.
             Msg::Report(WorldReport::Kill { robot }) => {
-                // A scheduled kill: the world counts the robot dead already; the real signal
-                // exercises the crash path.
-                if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
-                    scheduled_kills.insert(pid);
-                    frozen.remove(&pid);
-                    signal_all(&[pid], libc::SIGKILL);
-                }
+                self.sup.kill(robot).iter().for_each(launch::send)
             }
             Msg::Report(WorldReport::Freeze { robot }) => {
-                if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
-                    frozen.insert(pid);
-                    signal_all(&[pid], libc::SIGSTOP);
-                }
+                self.sup.freeze(robot).iter().for_each(launch::send)
             }
             Msg::Report(WorldReport::Thaw { robot }) => {
-                if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
-                    frozen.remove(&pid);
-                    signal_all(&[pid], libc::SIGCONT);
-                }
+                self.sup.thaw(robot).iter().for_each(launch::send)
             }
             Msg::Report(WorldReport::Restart { robot, incarnation }) => {
-                // The world waits for the fresh process's hello before the robot rejoins, so
-                // how long this takes changes nothing in the records.
-                if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
-                    scheduled_kills.insert(pid);
-                    frozen.remove(&pid);
-                    signal_all(&[pid], libc::SIGKILL);
-                }
-                match spawn_robot(robot, incarnation) {
-                    Ok(c) => {
-                        robots.insert(c.id() as i32, robot);
-                        started.push((c.id() as i32, robot, incarnation));
-                    }
-                    Err(e) => {
-                        tracing::error!(robot, "cannot restart robot: {e}");
-                        outcome
-                            .unscheduled_deaths
-                            .insert(robot, format!("failed to restart: {e}"));
-                        send_control(
-                            &mut world_stdin,
-                            &Control::RobotDied {
-                                robot,
-                                reason: "failed to restart".to_string(),
-                            },
-                        );
-                    }
-                }
+                self.restart(robot, incarnation)
             }
             Msg::Report(WorldReport::Unresponsive { robot, waited_ms }) => {
                 // Unscheduled: recorded as a death when the reaper reports the exit.
-                if let Some(pid) = live_pid(&robots, &scheduled_kills, robot) {
+                if let Some(order) = self.sup.kill_hung(robot) {
                     tracing::warn!(robot, waited_ms, "robot unresponsive; killing it");
-                    frozen.remove(&pid);
-                    signal_all(&[pid], libc::SIGKILL);
+                    launch::send(&order);
                 }
             }
             Msg::Report(WorldReport::Done {
                 interrupted,
                 metrics,
             }) => {
-                outcome.interrupted |= interrupted;
-                outcome.world_metrics = Some(metrics);
-                done = true;
+                self.outcome.interrupted |= interrupted;
+                self.outcome.world_metrics = Some(metrics);
+                self.done = true;
             }
             Msg::Report(WorldReport::Listening) => {}
-            Msg::WorldEof => world_eof = true,
-            Msg::Exited { pid, how }
-                if remotes.as_ref().is_some_and(|r| r.by_pid(pid).is_some()) =>
-            {
-                let r = remotes.as_mut().expect("checked");
-                let host = r.by_pid(pid).expect("checked");
-                let why = r.ended(host, &how);
-                let failure = &mut startup_failure;
-                lose_host(r, host, why, ready, failure, &mut outcome, &mut world_stdin);
-            }
-            Msg::Exited { pid, how } => {
-                if pid == world_pid {
-                    world_alive = false;
-                    world_exit = Some(how);
-                } else if let Some(id) = robots.remove(&pid) {
-                    frozen.remove(&pid);
-                    ended.insert(pid, how.clone());
-                    let scheduled = scheduled_kills.contains(&pid);
-                    robot_ended(id, &how, scheduled, &mut outcome, &mut world_stdin);
-                }
-            }
+            Msg::WorldEof => self.world_eof = true,
+            Msg::Exited { pid, how } => self.process_ended(pid, how),
             Msg::Host(host, HostMsg::Report(report)) => {
-                let Some(r) = remotes.as_mut() else { continue };
-                r.note(host, &report);
-                if let Some((robot, how, ordered)) =
-                    record_remote(host, &report, &mut remote_started, &mut remote_ended)
-                {
-                    robot_ended(robot, &how, ordered, &mut outcome, &mut world_stdin);
+                // Host messages come only with remotes; without them nothing else is done.
+                if self.remotes.is_none() {
+                    return;
                 }
-                if let HostReport::Failed { .. } = report {
-                    let why = r.lost(host).map(str::to_string);
-                    let failure = &mut startup_failure;
-                    lose_host(r, host, why, ready, failure, &mut outcome, &mut world_stdin);
-                }
+                self.host_report(host, report);
             }
             Msg::Host(_, HostMsg::Eof) => {}
-            Msg::Report(WorldReport::HostLost { host, robots }) => {
-                if let Some(r) = remotes.as_mut() {
-                    r.link_lost(&host);
-                }
-                for robot in robots {
-                    outcome
-                        .unscheduled_deaths
-                        .entry(robot)
-                        .or_insert_with(|| format!("host {host} lost"));
-                }
+            Msg::Report(WorldReport::HostLost { host, robots }) => self.host_lost(&host, robots),
+            Msg::Interrupt => self.interrupt(),
+        }
+        self.check_end();
+    }
+
+    /// A fault or a death of a robot on a remote host: ordered through its swarm-host. True
+    /// when `report` was such an order.
+    fn order_remote(&mut self, report: &WorldReport) -> bool {
+        if let Some(r) = self.remotes.as_mut()
+            && let Some((robot, order)) = remote_order(report)
+            && let Some(host) = r.host_of(robot)
+        {
+            if let WorldReport::Unresponsive { waited_ms, .. } = report {
+                self.outcome.unscheduled_deaths.insert(
+                    robot,
+                    format!("unresponsive for {waited_ms} ms (on host {})", r.name(host)),
+                );
             }
-            Msg::Interrupt => {
-                interrupts += 1;
-                outcome.interrupted = true;
-                if interrupts == 1 {
-                    tracing::warn!("stopping the run (Ctrl-C again to kill it)");
-                    send_control(&mut world_stdin, &Control::Stop);
-                } else {
-                    let mut all: Vec<i32> = robots.keys().copied().collect();
-                    all.push(world_pid);
-                    signal_all(&all, libc::SIGKILL);
-                    frozen.clear();
+            r.order(host, &order);
+            return true;
+        }
+        false
+    }
+
+    /// A scheduled restart: the old process is killed on the order, a fresh one started.
+    fn restart(&mut self, robot: u32, incarnation: u32) {
+        for order in self.sup.restart(robot, incarnation) {
+            let Order::Spawn { robot, incarnation } = order else {
+                launch::send(&order);
+                continue;
+            };
+            if let Err(e) = self.start_robot(robot, incarnation) {
+                tracing::error!(robot, "cannot restart robot: {e}");
+                self.not_started(
+                    robot,
+                    format!("failed to restart: {e}"),
+                    "failed to restart",
+                );
+            }
+        }
+    }
+
+    /// `pid` was reaped: a robot's end is told to the world, the world's is noted, a host
+    /// launcher's loses its host.
+    fn process_ended(&mut self, pid: Pid, how: String) {
+        match self.sup.reaped(pid, &how) {
+            Reaped::Robot(e) => robot_ended(
+                e.robot,
+                &e.how,
+                e.ordered,
+                &mut self.outcome,
+                &mut self.world_stdin,
+            ),
+            Reaped::Other { .. } if pid == self.world_pid => {
+                self.world_alive = false;
+                self.world_exit = Some(how);
+            }
+            Reaped::Other { .. } | Reaped::Unknown => {
+                if let Some(r) = self.remotes.as_mut()
+                    && let Some(host) = r.by_pid(pid)
+                {
+                    let why = r.ended(host, &how);
+                    let failure = &mut self.startup_failure;
+                    let (outcome, stdin) = (&mut self.outcome, &mut self.world_stdin);
+                    lose_host(r, host, why, self.ready, failure, outcome, stdin);
                 }
             }
         }
-        if startup_failure.is_some() && !done {
-            // Stop the world and the other hosts; the error is returned below.
-            send_control(&mut world_stdin, &Control::Stop);
-            if let Some(r) = remotes.as_mut() {
+    }
+
+    /// A remote host's report: a robot process's start or end, or the host's failure.
+    fn host_report(&mut self, host: usize, report: HostReport) {
+        let Some(r) = self.remotes.as_mut() else {
+            return;
+        };
+        r.note(host, &report);
+        if let Some((robot, how, ordered)) = record_remote(
+            host,
+            &report,
+            &mut self.remote_started,
+            &mut self.remote_ended,
+        ) {
+            robot_ended(
+                robot,
+                &how,
+                ordered,
+                &mut self.outcome,
+                &mut self.world_stdin,
+            );
+        }
+        if let HostReport::Failed { .. } = report {
+            let why = r.lost(host).map(str::to_string);
+            let failure = &mut self.startup_failure;
+            let (outcome, stdin) = (&mut self.outcome, &mut self.world_stdin);
+            lose_host(r, host, why, self.ready, failure, outcome, stdin);
+        }
+    }
+
+    /// The world lost its link to `host`: its `robots` died, unless they already had.
+    fn host_lost(&mut self, host: &str, robots: Vec<u32>) {
+        if let Some(r) = self.remotes.as_mut() {
+            r.link_lost(host);
+        }
+        for robot in robots {
+            self.outcome
+                .unscheduled_deaths
+                .entry(robot)
+                .or_insert_with(|| format!("host {host} lost"));
+        }
+    }
+
+    /// Ctrl-C: the first stops the run through the world, the next kills everything.
+    fn interrupt(&mut self) {
+        self.interrupts += 1;
+        self.outcome.interrupted = true;
+        if self.interrupts == 1 {
+            tracing::warn!("stopping the run (Ctrl-C again to kill it)");
+            send_control(&mut self.world_stdin, &Control::Stop);
+        } else {
+            launch::send(&self.sup.kill_all());
+        }
+    }
+
+    /// After each message: a host's start-up failure stops the run, and a world that exited
+    /// and closed its stdout without reporting the end failed.
+    fn check_end(&mut self) {
+        if self.startup_failure.is_some() && !self.done {
+            // Stop the world and the other hosts; `finish` returns the error.
+            send_control(&mut self.world_stdin, &Control::Stop);
+            if let Some(r) = self.remotes.as_mut() {
                 r.stop_all();
             }
-            done = true;
+            self.done = true;
         }
-        if !done
-            && world_eof
-            && let Some(how) = &world_exit
+        if !self.done
+            && self.world_eof
+            && let Some(how) = &self.world_exit
         {
-            outcome.world_failure = Some(format!("world process {how} before finishing"));
-            done = true;
+            self.outcome.world_failure = Some(format!("world process {how} before finishing"));
+            self.done = true;
         }
     }
-    drop(world_stdin);
-    // A stopped process can neither see the shutdown sample nor act on SIGTERM.
-    signal_all(&frozen.iter().copied().collect::<Vec<_>>(), libc::SIGCONT);
 
-    // The world told robots to exit (or died): give them a moment to go by themselves, then
-    // SIGTERM, then SIGKILL.
-    let mut remaining: Vec<i32> = robots.keys().copied().collect();
-    if world_alive {
-        remaining.push(world_pid);
-    }
-    let grace = if world_alive {
-        SHUTDOWN_GRACE
-    } else {
-        Duration::ZERO
-    };
-    if let Some(r) = remotes.as_ref() {
-        // Each host sees its robots out after the world's shutdown, then exits.
-        remaining.extend(r.running());
-    }
-    let mut launcher_ends: BTreeMap<i32, String> = BTreeMap::new();
-    wait_for_exit(&rx, &remaining, &mut ended, grace, |m| {
-        if let (Msg::Host(host, HostMsg::Report(report)), Some(r)) = (m, remotes.as_mut()) {
-            r.note(host, &report);
-            record_remote(host, &report, &mut remote_started, &mut remote_ended);
-        }
-    });
-    if let Some(r) = remotes.as_ref() {
-        for pid in r.pids() {
-            if let Some(how) = ended.remove(&pid) {
-                launcher_ends.insert(pid, how);
+    /// Sees the run's processes out, cleans the remote hosts and records every robot
+    /// process; a host's start-up failure is the run's error.
+    fn finish(mut self, run_id: &str) -> anyhow::Result<ProcessOutcome> {
+        drop(self.world_stdin.take());
+        // The world told robots to exit (or died): give them a moment to go by themselves,
+        // then SIGTERM, then SIGKILL. Each host sees its robots out after the world's
+        // shutdown, then exits; its launcher is watched with the rest.
+        let grace = if self.world_alive {
+            SHUTDOWN_GRACE
+        } else {
+            Duration::ZERO
+        };
+        launch::see_out(&mut self.sup, &self.rx, grace, EXIT_GRACE, |sup, m| {
+            let remotes = self.remotes.as_mut();
+            seeing_out(
+                sup,
+                m,
+                remotes,
+                &mut self.remote_started,
+                &mut self.remote_ended,
+            )
+        });
+        if let Some(r) = self.remotes.as_ref() {
+            let unclean = r.clean(run_id);
+            if !unclean.is_empty() {
+                tracing::warn!(?unclean, "hosts whose resources could not be removed");
             }
+            self.outcome.hosts = Some(r.stats());
         }
-        let unclean = r.clean(run.run_id());
-        if !unclean.is_empty() {
-            tracing::warn!(?unclean, "hosts whose resources could not be removed");
+        self.record_processes();
+        if let Some(f) = self.startup_failure {
+            return Err(f.into());
         }
-        outcome.hosts = Some(r.stats());
+        Ok(self.outcome)
     }
-    tracing::debug!(?launcher_ends, "hosts ended");
-    outcome.processes = started
-        .into_iter()
-        .map(|(pid, robot, incarnation)| RobotProcess {
-            robot,
-            incarnation,
-            pid,
-            end: ended
-                .remove(&pid)
-                .unwrap_or_else(|| "not reaped".to_string()),
-            scheduled_kill: scheduled_kills.contains(&pid),
-            host: None,
-        })
-        .collect();
-    if let Some(r) = remotes.as_ref() {
-        for (host, pid, robot, incarnation) in remote_started {
-            let (end, ordered) = remote_ended
+
+    /// Every robot process started, this host's in start order, then the remote hosts'.
+    fn record_processes(&mut self) {
+        self.outcome.processes = self
+            .sup
+            .processes()
+            .iter()
+            .map(|p| RobotProcess {
+                robot: p.robot,
+                incarnation: p.incarnation,
+                pid: p.pid,
+                end: p.end.clone().unwrap_or_else(|| "not reaped".to_string()),
+                scheduled_kill: p.ordered,
+                host: None,
+            })
+            .collect();
+        let Some(r) = self.remotes.as_ref() else {
+            return;
+        };
+        for (host, pid, robot, incarnation) in std::mem::take(&mut self.remote_started) {
+            let (end, ordered) = self
+                .remote_ended
                 .remove(&(host, pid))
                 .unwrap_or_else(|| ("not reaped".to_string(), false));
-            outcome.processes.push(RobotProcess {
+            let unscheduled = self.outcome.unscheduled_deaths.contains_key(&robot);
+            self.outcome.processes.push(RobotProcess {
                 robot,
                 incarnation,
                 pid,
                 end,
-                scheduled_kill: ordered && !outcome.unscheduled_deaths.contains_key(&robot),
+                scheduled_kill: ordered && !unscheduled,
                 host: Some(r.name(host).to_string()),
             });
-        }
-    }
-    if let Some(f) = startup_failure {
-        return Err(f.into());
-    }
-    Ok(outcome)
-}
-
-/// Waits until every pid in `pids` has been reaped, noting how each ended in `ended`: after
-/// `grace` the rest get SIGTERM, after a further [`EXIT_GRACE`] SIGKILL. Ctrl-C while waiting
-/// kills at once.
-fn wait_for_exit(
-    rx: &Receiver<Msg>,
-    pids: &[i32],
-    ended: &mut BTreeMap<i32, String>,
-    grace: Duration,
-    mut other: impl FnMut(Msg),
-) {
-    let mut left: std::collections::BTreeSet<i32> = pids.iter().copied().collect();
-    let mut stage = 0; // 0: waiting, 1: SIGTERM sent, 2: SIGKILL sent
-    let mut deadline = Instant::now() + grace;
-    while !left.is_empty() {
-        let wait = deadline.saturating_duration_since(Instant::now());
-        let pending: Vec<i32> = left.iter().copied().collect();
-        match rx.recv_timeout(wait) {
-            Ok(Msg::Exited { pid, how }) => {
-                left.remove(&pid);
-                ended.insert(pid, how);
-            }
-            Ok(Msg::Interrupt) => {
-                signal_all(&pending, libc::SIGKILL);
-                stage = 2;
-                deadline = Instant::now() + EXIT_GRACE;
-            }
-            Ok(m) => other(m),
-            Err(crossbeam_channel::RecvTimeoutError::Timeout) if stage == 0 => {
-                tracing::debug!(
-                    count = left.len(),
-                    "processes still running; sending SIGTERM"
-                );
-                signal_all(&pending, libc::SIGTERM);
-                // A process stopped from outside acts on SIGTERM only once continued.
-                signal_all(&pending, libc::SIGCONT);
-                stage = 1;
-                deadline = Instant::now() + EXIT_GRACE;
-            }
-            Err(crossbeam_channel::RecvTimeoutError::Timeout) if stage == 1 => {
-                tracing::warn!(
-                    count = left.len(),
-                    pids = ?pending,
-                    "processes did not exit in time; killing them"
-                );
-                signal_all(&pending, libc::SIGKILL);
-                stage = 2;
-                deadline = Instant::now() + EXIT_GRACE;
-            }
-            Err(_) => {
-                tracing::error!(count = left.len(), "processes could not be reaped");
-                return;
-            }
         }
     }
 }

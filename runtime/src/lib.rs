@@ -6,7 +6,12 @@
 //!   hosts, writes the records.
 //! - [`robot`]: the `swarm-agent` process around `swarmrt_agent::Agent`: says hello, sleeps
 //!   until a tick, answers it.
+//! - [`host`]: the `swarm-host` process: a remote host's stand-in for the world.
+//! - [`supervisor`]: the robot process lifecycle all three drive (spawn, hello binding,
+//!   kill, freeze, thaw, restart, reap, shut down), a pure state machine.
 #![warn(missing_docs)]
 
+pub mod host;
 pub mod robot;
+pub mod supervisor;
 pub mod world;

@@ -2,5 +2,5 @@
 //! through the host's launcher).
 
 fn main() -> std::process::ExitCode {
-    swarmrt_hosts::host::main()
+    swarmrt_runtime::host::main()
 }

@@ -3,6 +3,7 @@
 //! and control lines from the orchestrator (relayed by a small thread), wake it.
 
 use std::collections::{BTreeMap, BTreeSet};
+
 use std::io::{BufRead, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -21,11 +22,59 @@ use swarmrt_protocol::services::RunServices;
 use swarmrt_protocol::{
     Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION, RobotState,
 };
+
+use crate::supervisor::hello::{Bindings, Sample};
 use swarmrt_scenario::Config;
 
 use super::timing::{TickPhases, TickTimer, TickTiming};
 use swarmrt_world::records::RecordWriter;
 use swarmrt_world::{ProcessSignal, World};
+
+/// Where a command came from: a local robot's publisher, or a remote host's robot (its host
+/// bound the publisher there).
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+enum Origin {
+    Local(UniquePublisherId),
+    Remote(u32),
+}
+
+/// Who speaks for which robot, local and remote, and who waits for a hello (before tick 0
+/// every robot; later, robots restarted by the schedule until their fresh process says it).
+type Hellos = Bindings<Origin>;
+
+/// Applies one classified command sample: a bound robot's first sample after the
+/// observation is its answer, whatever it says (World::validate refuses a wrong tick, kind,
+/// id or version, and the robot stands still this tick instead of the world waiting for
+/// ever); the rest is counted.
+fn take(
+    sample: Sample,
+    c: Command,
+    pending: &mut BTreeSet<u32>,
+    commands: &mut [Option<Command>],
+    stats: &mut ShellStats,
+) {
+    match sample {
+        Sample::Robot(robot) if pending.remove(&robot) => commands[robot as usize] = Some(c),
+        Sample::Robot(_) => stats.extra_commands += 1,
+        Sample::Hello(robot) => tracing::debug!(robot, pid = c.pid, "robot ready"),
+        Sample::BadHello => {
+            stats.bad_hello += 1;
+            tracing::warn!(
+                robot = c.robot,
+                "ignoring a hello that claims a taken or foreign id"
+            );
+        }
+        Sample::Unknown => {
+            stats.unknown_sender += 1;
+            if stats.unknown_sender == 1 {
+                tracing::warn!(
+                    claimed = c.robot,
+                    "command from a publisher that is no robot of this run"
+                );
+            }
+        }
+    }
+}
 
 /// Longest the world waits for all robots to say hello.
 const STARTUP_TIMEOUT: Duration = Duration::from_secs(120);
@@ -146,8 +195,6 @@ struct Remote {
     names: Vec<String>,
     joined: Vec<bool>,
     lost: Vec<bool>,
-    /// Remote robots whose current process said hello (bound by their host).
-    bound: BTreeSet<u32>,
     byes: usize,
 }
 
@@ -163,7 +210,6 @@ impl Remote {
             names: hosts.hosts.iter().map(|h| h.name.clone()).collect(),
             joined: vec![false; n],
             lost: vec![false; n],
-            bound: BTreeSet::new(),
             byes: 0,
         })
     }
@@ -187,22 +233,20 @@ impl Remote {
         Ok(())
     }
 
-    /// Applies what the hosts said. `hello_phase` is true before tick 0, when `waiting` holds
-    /// the robots that have not said hello; afterwards it holds those the tick waits for.
-    #[allow(clippy::too_many_arguments)]
+    /// Applies what the hosts said: joins, byes, and their robots' commands, bound by the
+    /// same rule as local ones (an entry may claim only the robot it is attributed to).
     fn drain(
         &mut self,
         world: &mut World,
-        hello_phase: bool,
-        waiting: &mut BTreeSet<u32>,
-        reborn: &mut BTreeSet<u32>,
+        hellos: &mut Hellos,
+        pending: &mut BTreeSet<u32>,
         commands: &mut [Option<Command>],
         stats: &mut ShellStats,
     ) -> Result<(), IpcError> {
         while let Ok(h) = self.heard.try_recv() {
             match h {
                 Heard::Malformed { host } => self.link.count_up(host, 0, true),
-                Heard::Lost { host } => self.lose(host, world, waiting),
+                Heard::Lost { host } => self.lose(host, world, hellos, pending),
                 Heard::Up { host, msg, bytes } => {
                     self.link.count_up(host, bytes, false);
                     match msg {
@@ -226,26 +270,11 @@ impl Remote {
                                     stats.unknown_sender += 1;
                                     continue;
                                 }
-                                let hello = c.version == PROTOCOL_VERSION
-                                    && CommandKind::from_u32(c.kind) == Some(CommandKind::Hello);
-                                if !self.bound.contains(&robot) {
-                                    let expected = if hello_phase {
-                                        waiting.remove(&robot)
-                                    } else {
-                                        reborn.remove(&robot)
-                                    };
-                                    if hello && expected {
-                                        self.bound.insert(robot);
-                                    } else if hello {
-                                        stats.bad_hello += 1;
-                                    } else {
-                                        stats.unknown_sender += 1;
-                                    }
-                                } else if !hello_phase && waiting.remove(&robot) {
-                                    commands[robot as usize] = Some(c);
-                                } else {
-                                    stats.extra_commands += 1;
-                                }
+                                let sample =
+                                    hellos.accept_claiming(Origin::Remote(robot), &c, |claimed| {
+                                        claimed == robot
+                                    });
+                                take(sample, c, pending, commands, stats);
                             }
                         }
                     }
@@ -256,15 +285,21 @@ impl Remote {
     }
 
     /// A host's session is gone: its robots are dead from this tick.
-    fn lose(&mut self, host: usize, world: &mut World, waiting: &mut BTreeSet<u32>) {
+    fn lose(
+        &mut self,
+        host: usize,
+        world: &mut World,
+        hellos: &mut Hellos,
+        pending: &mut BTreeSet<u32>,
+    ) {
         if self.lost[host] {
             return;
         }
         self.lost[host] = true;
         let mut robots = Vec::new();
         for r in self.link.robots(host) {
-            self.bound.remove(&r);
-            waiting.remove(&r);
+            hellos.forget(r);
+            pending.remove(&r);
             if world.robots()[r as usize].state != RobotState::Dead {
                 world.mark_dead(r, &format!("host {} lost", self.names[host]));
                 robots.push(r);
@@ -362,11 +397,56 @@ pub fn run(
     mode: Mode,
 ) -> Result<(), IpcError> {
     let n = cfg.robots.count as usize;
-    let realtime = mode == Mode::Realtime;
     let mut world = World::new(cfg, vocabulary).map_err(|e| format!("{}: {}", e.key, e.message))?;
     let mut recorder = RecordWriter::for_run(out_dir, cfg)?;
     world.set_radio_recording(cfg.scenario.record_radio);
+    warn_on_fd_limit(n);
+    let node = ipc::node(run, &run.world_node_name())?;
+    let observers = cfg.ipc.observers as usize;
+    let services = ipc::create_services(&node, run, n, cfg.faults.restart.len(), observers)?;
+    let ports = ipc::WorldPorts::open(
+        &services.observations,
+        &services.observations_event,
+        &services.commands,
+        &services.commands_event,
+        n,
+        observers,
+    )?;
+    let control = spawn_control_thread(run)?;
+    let remote = match hosts {
+        Some((file, layout)) => Some(Remote::open(run, file, layout)?),
+        None => None,
+    };
+    report(&WorldReport::Listening);
 
+    let mut shell = Shell {
+        world,
+        node: &node,
+        ports,
+        control,
+        remote,
+        hellos: Bindings::awaiting(0..n as u32),
+        remote_robot: (0..n as u32)
+            .map(|r| hosts.is_some_and(|(f, _)| f.host_of(r).is_some()))
+            .collect(),
+        pending: BTreeSet::new(),
+        commands: vec![None; n],
+        stats: ShellStats::default(),
+        interrupted: false,
+        unresponsive: Duration::from_millis(cfg.scenario.unresponsive_ms),
+    };
+    // Phase 1: every robot says hello (or dies) before tick 0.
+    let started = Instant::now();
+    shell.await_hellos(started)?;
+    report(&WorldReport::Ready {
+        startup_ms: started.elapsed().as_millis() as u64,
+    });
+    // Phase 2: ticks, then the end.
+    shell.run_ticks(cfg, mode, &mut recorder)?;
+    shell.finish(recorder)
+}
+
+fn warn_on_fd_limit(n: usize) {
     match ipc::raise_fd_limit() {
         Ok(limit) if limit < 8 * n as u64 + 64 => {
             tracing::warn!(
@@ -378,114 +458,184 @@ pub fn run(
         Ok(_) => {}
         Err(e) => tracing::warn!("cannot raise the open-file limit: {e}"),
     }
-    let node = ipc::node(run, &run.world_node_name())?;
-    let observers = cfg.ipc.observers as usize;
-    let services = ipc::create_services(&node, run, n, cfg.faults.restart.len(), observers)?;
-    let ipc::WorldPorts {
-        publisher,
-        notifier: obs_notifier,
-        commands: subscriber,
-        listener,
-    } = ipc::WorldPorts::open(
-        &services.observations,
-        &services.observations_event,
-        &services.commands,
-        &services.commands_event,
-        n,
-        observers,
-    )?;
-    let control = spawn_control_thread(run)?;
-    let mut remote = match hosts {
-        Some((file, layout)) => Some(Remote::open(run, file, layout)?),
-        None => None,
-    };
-    report(&WorldReport::Listening);
+}
 
-    let mut stats = ShellStats::default();
-    let started = Instant::now();
-    let mut interrupted = false;
+/// The world process between its phases: the World core and everything that reaches it.
+struct Shell<'a> {
+    world: World,
+    node: &'a Node<ipc::Svc>,
+    ports: ipc::WorldPorts,
+    /// Control lines from the orchestrator.
+    control: Receiver<Control>,
+    /// The remote hosts (`--hosts` runs).
+    remote: Option<Remote>,
+    /// Who speaks for which robot, and who waits for a hello.
+    hellos: Hellos,
+    /// Robots of a remote host: no local publisher may claim one.
+    remote_robot: Vec<bool>,
+    /// The robots whose answer the current tick waits for (none before tick 0).
+    pending: BTreeSet<u32>,
+    /// The current tick's answers.
+    commands: Vec<Option<Command>>,
+    stats: ShellStats,
+    /// A Stop, a closed stdin or a termination signal: finish the records and stop.
+    interrupted: bool,
+    /// `scenario.unresponsive_ms`: a robot silent this long is given up.
+    unresponsive: Duration,
+}
 
-    // Phase 1: every robot says hello (or dies) before tick 0.
-    // Each robot is bound to the publisher its hello came from: later samples are
-    // attributed by origin, never by the id a robot writes into them.
-    let mut robot_of: BTreeMap<UniquePublisherId, u32> = BTreeMap::new();
-    let mut waiting: BTreeSet<u32> = (0..n as u32).collect();
-    while !waiting.is_empty() && !interrupted {
-        while let Some(sample) = subscriber.receive()? {
-            let origin = sample.origin();
-            let c = *sample.payload();
-            let hello = c.version == PROTOCOL_VERSION
-                && CommandKind::from_u32(c.kind) == Some(CommandKind::Hello);
-            if hello && !robot_of.contains_key(&origin) && waiting.remove(&c.robot) {
-                robot_of.insert(origin, c.robot);
-                tracing::debug!(robot = c.robot, pid = c.pid, "robot ready");
-            } else {
-                stats.bad_hello += 1;
-                tracing::warn!(
-                    robot = c.robot,
-                    "ignoring a hello that is malformed or claims a taken id"
-                );
-            }
-        }
-        if let Some(r) = remote.as_mut() {
+impl Shell<'_> {
+    /// Takes everything that arrived: local command samples, the hosts' messages and the
+    /// orchestrator's control lines.
+    fn gather(&mut self) -> Result<(), IpcError> {
+        receive(
+            &self.ports.commands,
+            &self.remote_robot,
+            &mut self.hellos,
+            &mut self.pending,
+            &mut self.commands,
+            &mut self.stats,
+        )?;
+        if let Some(r) = self.remote.as_mut() {
             r.drain(
-                &mut world,
-                true,
-                &mut waiting,
-                &mut BTreeSet::new(),
-                &mut [],
-                &mut stats,
+                &mut self.world,
+                &mut self.hellos,
+                &mut self.pending,
+                &mut self.commands,
+                &mut self.stats,
             )?;
         }
-        interrupted |= drain_control(&control, &node, &mut world, &mut waiting)?;
-        if waiting.is_empty() || interrupted {
-            break;
-        }
-        if started.elapsed() > STARTUP_TIMEOUT {
-            return Err(format!(
-                "{} robots never said hello, e.g. robot {}",
-                waiting.len(),
-                waiting.first().copied().unwrap_or(0)
-            )
-            .into());
-        }
-        interrupted |= wait(&listener, &node, Duration::from_millis(500))?;
+        self.interrupted |= drain_control(
+            &self.control,
+            self.node,
+            &mut self.world,
+            &mut self.hellos,
+            &mut self.pending,
+        )?;
+        Ok(())
     }
-    report(&WorldReport::Ready {
-        startup_ms: started.elapsed().as_millis() as u64,
-    });
 
-    // Phase 2: lock-step ticks.
-    let deadline = Duration::from_millis(cfg.scenario.deadline_ms);
-    let unresponsive = Duration::from_millis(cfg.scenario.unresponsive_ms);
-    let mut obs = vec![Observation::empty(0, 0); n];
-    let mut commands: Vec<Option<Command>> = vec![None; n];
-    let mut last_progress = Instant::now();
-    let mut timer = TickTimer::default();
-    // The world times its stages too (wall clock, for `shell.timing` only).
-    world.set_stage_timing(true);
-    // Robots restarted by the schedule whose fresh process has not said hello yet.
-    let mut reborn: BTreeSet<u32> = BTreeSet::new();
-    let events = world.drain_events();
-    recorder.record(world.tick(), world.robots(), events)?;
-    let period = Duration::from_secs_f64(cfg.scenario.dt);
-    let mut standing = Standing::new(n);
-    let mut rt_stats = RealtimeStats {
-        period_ms: period.as_secs_f64() * 1e3,
-        ..RealtimeStats::default()
-    };
-    let mut tick_ends = Instant::now() + period;
-    while !interrupted && !world.finished() {
+    /// Sleeps until a robot, a host or the control thread wakes the world, or `timeout`.
+    fn sleep(&mut self, timeout: Duration) -> Result<(), IpcError> {
+        self.interrupted |= wait(&self.ports.listener, self.node, timeout)?;
+        Ok(())
+    }
+
+    /// Phase 1: waits until every robot said hello (or died), for [`STARTUP_TIMEOUT`].
+    fn await_hellos(&mut self, started: Instant) -> Result<(), IpcError> {
+        while !self.hellos.awaiting_set().is_empty() && !self.interrupted {
+            self.gather()?;
+            if self.hellos.awaiting_set().is_empty() || self.interrupted {
+                break;
+            }
+            if started.elapsed() > STARTUP_TIMEOUT {
+                let waiting = self.hellos.awaiting_set();
+                return Err(format!(
+                    "{} robots never said hello, e.g. robot {}",
+                    waiting.len(),
+                    waiting.first().copied().unwrap_or(0)
+                )
+                .into());
+            }
+            self.sleep(Duration::from_millis(500))?;
+        }
+        Ok(())
+    }
+
+    /// Phase 2: ticks until the scenario ends or the run is stopped.
+    fn run_ticks(
+        &mut self,
+        cfg: &Config,
+        mode: Mode,
+        recorder: &mut RecordWriter,
+    ) -> Result<(), IpcError> {
+        let realtime = mode == Mode::Realtime;
+        let n = self.commands.len();
+        let deadline = Duration::from_millis(cfg.scenario.deadline_ms);
+        let mut obs = vec![Observation::empty(0, 0); n];
+        let mut last_progress = Instant::now();
+        let mut timer = TickTimer::default();
+        // The world times its stages too (wall clock, for `shell.timing` only).
+        self.world.set_stage_timing(true);
+        let events = self.world.drain_events();
+        recorder.record(self.world.tick(), self.world.robots(), events)?;
+        let period = Duration::from_secs_f64(cfg.scenario.dt);
+        let mut standing = Standing::new(n);
+        let mut rt_stats = RealtimeStats {
+            period_ms: period.as_secs_f64() * 1e3,
+            ..RealtimeStats::default()
+        };
+        let mut tick_ends = Instant::now() + period;
+        while !self.interrupted && !self.world.finished() {
+            let rejoining = self.apply_signals(&mut standing);
+            let tick = self.world.tick();
+            self.await_rejoin(rejoining)?;
+            if self.interrupted {
+                break;
+            }
+            let t0 = Instant::now();
+            self.world.observe(&mut obs);
+            let t1 = Instant::now();
+            self.publish(tick, &obs)?;
+            let t2 = Instant::now();
+            if realtime {
+                self.collect_realtime(&mut standing, tick_ends, &mut rt_stats)?;
+                for robot in std::mem::take(&mut self.pending) {
+                    if self.world.robots()[robot as usize].state.expects_command() {
+                        self.commands[robot as usize] =
+                            standing.command(robot, tick, &mut rt_stats);
+                    }
+                }
+            } else {
+                self.collect(tick, deadline)?;
+            }
+            if self.interrupted {
+                break;
+            }
+            let t3 = Instant::now();
+            self.world.step(&self.commands);
+            let events = self.world.drain_events();
+            let radio = self.world.take_radio_rows();
+            let t4 = Instant::now();
+            recorder.record_tick(self.world.tick(), self.world.robots(), events, radio)?;
+            let t5 = Instant::now();
+            let ns = |a: Instant, b: Instant| (b - a).as_nanos() as u64;
+            timer.add(TickPhases {
+                observe: ns(t0, t1),
+                publish: ns(t1, t2),
+                wait: ns(t2, t3),
+                step: ns(t3, t4),
+                record: ns(t4, t5),
+                stages: self.world.take_stage_times(),
+            });
+            if self.world.tick() <= EARLY_REPORTS || last_progress.elapsed() >= PROGRESS_EVERY {
+                last_progress = Instant::now();
+                report(&WorldReport::Tick {
+                    tick: self.world.tick(),
+                });
+            }
+            tick_ends += period;
+            if realtime && Instant::now() > tick_ends {
+                rt_stats.overruns += 1;
+                tick_ends = Instant::now() + period;
+            }
+        }
+        if realtime {
+            self.stats.realtime = Some(rt_stats);
+        }
+        self.stats.timing = timer.summary();
+        Ok(())
+    }
+
+    /// The schedule's process faults of this tick, passed to the orchestrator (which carries
+    /// them out); returns the restarted robots that rejoin now.
+    fn apply_signals(&mut self, standing: &mut Standing) -> BTreeSet<u32> {
         let mut rejoining: BTreeSet<u32> = BTreeSet::new();
-        for signal in world.take_signals() {
+        for signal in self.world.take_signals() {
             match signal {
                 ProcessSignal::Kill(robot) => {
                     standing.forget(robot);
-                    robot_of.retain(|_, r| *r != robot);
-                    if let Some(r) = remote.as_mut() {
-                        r.bound.remove(&robot);
-                    }
-                    reborn.remove(&robot);
+                    self.hellos.forget(robot);
                     report(&WorldReport::Kill { robot });
                 }
                 ProcessSignal::Freeze(robot) => {
@@ -500,11 +650,7 @@ pub fn run(
                 ProcessSignal::Restart { robot, incarnation } => {
                     // Samples from the old process are no robot's answer any more.
                     standing.forget(robot);
-                    robot_of.retain(|_, r| *r != robot);
-                    if let Some(r) = remote.as_mut() {
-                        r.bound.remove(&robot);
-                    }
-                    reborn.insert(robot);
+                    self.hellos.expect_hello(robot);
                     report(&WorldReport::Restart { robot, incarnation });
                 }
                 ProcessSignal::Rejoin(robot) => {
@@ -512,252 +658,169 @@ pub fn run(
                 }
             }
         }
-        let tick = world.tick();
-        // A rejoining robot's fresh process must be bound before its first observation.
+        rejoining
+    }
+
+    /// A rejoining robot's fresh process must be bound before its first observation; one
+    /// that says no hello for `scenario.unresponsive_ms` is given up.
+    fn await_rejoin(&mut self, mut rejoining: BTreeSet<u32>) -> Result<(), IpcError> {
         let hello_since = Instant::now();
         while !rejoining.is_empty() {
-            let mut none = BTreeSet::new();
-            receive(
-                &subscriber,
-                &mut robot_of,
-                &mut reborn,
-                &mut none,
-                &mut commands,
-                &mut stats,
-            )?;
-            if let Some(r) = remote.as_mut() {
-                r.drain(
-                    &mut world,
-                    false,
-                    &mut none,
-                    &mut reborn,
-                    &mut commands,
-                    &mut stats,
-                )?;
-            }
-            interrupted |= drain_control(&control, &node, &mut world, &mut none)?;
+            self.pending.clear();
+            self.gather()?;
             rejoining.retain(|r| {
-                reborn.contains(r) && world.robots()[*r as usize].state != RobotState::Dead
+                self.hellos.is_awaiting(*r)
+                    && self.world.robots()[*r as usize].state != RobotState::Dead
             });
-            if rejoining.is_empty() || interrupted {
+            if rejoining.is_empty() || self.interrupted {
                 break;
             }
-            if hello_since.elapsed() >= unresponsive {
+            if hello_since.elapsed() >= self.unresponsive {
                 for &robot in &rejoining {
                     give_up(
-                        &mut world,
+                        &mut self.world,
                         robot,
                         hello_since.elapsed(),
                         "never said hello after its restart",
                     );
-                    reborn.remove(&robot);
+                    self.hellos.forget(robot);
                 }
                 break;
             }
-            interrupted |= wait(
-                &listener,
-                &node,
-                unresponsive.saturating_sub(hello_since.elapsed()),
-            )?;
+            self.sleep(self.unresponsive.saturating_sub(hello_since.elapsed()))?;
         }
-        if interrupted {
-            break;
-        }
+        Ok(())
+    }
 
-        let t0 = Instant::now();
-        world.observe(&mut obs);
-        let t1 = Instant::now();
-        commands.iter_mut().for_each(|c| *c = None);
-        let mut waiting: BTreeSet<u32> = world
+    /// Publishes the tick's observations (locally and to the hosts) and notes which robots
+    /// the tick waits for.
+    fn publish(&mut self, tick: u64, obs: &[Observation]) -> Result<(), IpcError> {
+        self.commands.iter_mut().for_each(|c| *c = None);
+        self.pending = self
+            .world
             .robots()
             .iter()
             .filter(|r| r.state.expects_command())
             .map(|r| r.id)
             .collect();
-        let sample = publisher.loan_slice_uninit(n)?;
-        let mut sample = sample.write_from_slice(&obs);
+        let sample = self.ports.publisher.loan_slice_uninit(obs.len())?;
+        let mut sample = sample.write_from_slice(obs);
         *sample.user_header_mut() = ObservationHeader {
             version: PROTOCOL_VERSION,
             shutdown: 0,
             tick,
         };
         sample.send()?;
-        obs_notifier.notify()?;
-        if let Some(r) = remote.as_mut() {
-            r.send_tick(tick, &obs, &waiting)?;
+        self.ports.notifier.notify()?;
+        if let Some(r) = self.remote.as_mut() {
+            r.send_tick(tick, obs, &self.pending)?;
         }
-        let t2 = Instant::now();
+        Ok(())
+    }
 
+    /// Lock-step: waits until every pending robot answered. Past `deadline` the late ones are
+    /// counted; past `scenario.unresponsive_ms` they are given up.
+    fn collect(&mut self, tick: u64, deadline: Duration) -> Result<(), IpcError> {
         let sent_at = Instant::now();
         let mut late_logged = false;
-        if realtime {
-            interrupted |= collect_realtime(
-                &subscriber,
-                &listener,
-                &node,
-                &control,
-                &mut world,
-                &mut robot_of,
-                &mut reborn,
-                &mut standing,
-                tick_ends,
-                unresponsive,
-                &mut stats,
-                &mut rt_stats,
-            )?;
-            for robot in std::mem::take(&mut waiting) {
-                if world.robots()[robot as usize].state.expects_command() {
-                    commands[robot as usize] = standing.command(robot, tick, &mut rt_stats);
-                }
-            }
-        }
         loop {
-            if realtime {
-                break;
-            }
-            receive(
-                &subscriber,
-                &mut robot_of,
-                &mut reborn,
-                &mut waiting,
-                &mut commands,
-                &mut stats,
-            )?;
-            if let Some(r) = remote.as_mut() {
-                r.drain(
-                    &mut world,
-                    false,
-                    &mut waiting,
-                    &mut reborn,
-                    &mut commands,
-                    &mut stats,
-                )?;
-            }
-            interrupted |= drain_control(&control, &node, &mut world, &mut waiting)?;
-            if waiting.is_empty() || interrupted {
-                break;
+            self.gather()?;
+            if self.pending.is_empty() || self.interrupted {
+                return Ok(());
             }
             let waited = sent_at.elapsed();
-            if waited >= unresponsive {
-                for robot in std::mem::take(&mut waiting) {
-                    robot_of.retain(|_, r| *r != robot);
-                    if let Some(r) = remote.as_mut() {
-                        r.bound.remove(&robot);
-                    }
-                    give_up(&mut world, robot, waited, "no answer");
+            if waited >= self.unresponsive {
+                for robot in std::mem::take(&mut self.pending) {
+                    self.hellos.forget(robot);
+                    give_up(&mut self.world, robot, waited, "no answer");
                 }
-                break;
+                return Ok(());
             }
             let timeout = if waited < deadline {
                 deadline - waited
             } else {
                 if !late_logged {
                     late_logged = true;
-                    stats.late += waiting.len() as u64;
-                    tracing::warn!(tick, late = ?waiting, "robots past the deadline");
+                    self.stats.late += self.pending.len() as u64;
+                    tracing::warn!(tick, late = ?self.pending, "robots past the deadline");
                 }
-                unresponsive - waited
+                self.unresponsive - waited
             };
-            interrupted |= wait(&listener, &node, timeout)?;
+            self.sleep(timeout)?;
         }
-        if interrupted {
-            break;
-        }
-        let t3 = Instant::now();
-        world.step(&commands);
-        let events = world.drain_events();
-        let radio = world.take_radio_rows();
-        let t4 = Instant::now();
-        recorder.record_tick(world.tick(), world.robots(), events, radio)?;
-        let t5 = Instant::now();
-        let ns = |a: Instant, b: Instant| (b - a).as_nanos() as u64;
-        timer.add(TickPhases {
-            observe: ns(t0, t1),
-            publish: ns(t1, t2),
-            wait: ns(t2, t3),
-            step: ns(t3, t4),
-            record: ns(t4, t5),
-            stages: world.take_stage_times(),
-        });
-        if world.tick() <= EARLY_REPORTS || last_progress.elapsed() >= PROGRESS_EVERY {
-            last_progress = Instant::now();
-            report(&WorldReport::Tick { tick: world.tick() });
-        }
-        tick_ends += period;
-        if realtime && Instant::now() > tick_ends {
-            rt_stats.overruns += 1;
-            tick_ends = Instant::now() + period;
-        }
-    }
-    if realtime {
-        stats.realtime = Some(rt_stats);
     }
 
-    // Tell robots the run is over (a header-only sample), then report.
-    let sample = publisher.loan_slice_uninit(0)?;
-    let mut sample = sample.write_from_slice(&[]);
-    *sample.user_header_mut() = ObservationHeader {
-        version: PROTOCOL_VERSION,
-        shutdown: 1,
-        tick: world.tick(),
-    };
-    sample.send()?;
-    obs_notifier.notify()?;
-    if let Some(r) = remote.take() {
-        r.finish(world.tick(), &mut stats);
+    /// Real-time: takes whatever arrives until the tick's end (`until`).
+    fn collect_realtime(
+        &mut self,
+        standing: &mut Standing,
+        until: Instant,
+        rt: &mut RealtimeStats,
+    ) -> Result<(), IpcError> {
+        self.interrupted |= collect_until(
+            &self.ports.commands,
+            &self.ports.listener,
+            self.node,
+            &self.control,
+            &mut self.world,
+            &self.remote_robot,
+            &mut self.hellos,
+            standing,
+            until,
+            self.unresponsive,
+            &mut self.stats,
+            rt,
+        )?;
+        Ok(())
     }
-    // Deaths marked after the last recorded tick: events only, the tick's rows exist.
-    recorder.record_events(world.drain_events())?;
-    recorder.finish()?;
-    stats.timing = timer.summary();
-    let mut metrics = serde_json::to_value(world.metrics())?;
-    metrics["shell"] = serde_json::to_value(&stats)?;
-    report(&WorldReport::Tick { tick: world.tick() });
-    report(&WorldReport::Done {
-        interrupted,
-        metrics,
-    });
-    Ok(())
+
+    /// Tells robots and hosts the run is over, closes the records and reports them.
+    fn finish(mut self, mut recorder: RecordWriter) -> Result<(), IpcError> {
+        let tick = self.world.tick();
+        // A header-only sample.
+        let sample = self.ports.publisher.loan_slice_uninit(0)?;
+        let mut sample = sample.write_from_slice(&[]);
+        *sample.user_header_mut() = ObservationHeader {
+            version: PROTOCOL_VERSION,
+            shutdown: 1,
+            tick,
+        };
+        sample.send()?;
+        self.ports.notifier.notify()?;
+        if let Some(r) = self.remote.take() {
+            r.finish(tick, &mut self.stats);
+        }
+        // Deaths marked after the last recorded tick: events only, the tick's rows exist.
+        recorder.record_events(self.world.drain_events())?;
+        recorder.finish()?;
+        let mut metrics = serde_json::to_value(self.world.metrics())?;
+        metrics["shell"] = serde_json::to_value(&self.stats)?;
+        report(&WorldReport::Tick { tick });
+        report(&WorldReport::Done {
+            interrupted: self.interrupted,
+            metrics,
+        });
+        Ok(())
+    }
 }
 
-/// Receives every queued command sample. The first sample a bound robot sends after the
-/// observation is its answer, whatever it says: World::validate refuses a wrong tick, kind, id
-/// or version, and the robot stands still this tick instead of the world waiting forever. A
-/// hello from a new publisher binds it to a restarted robot awaiting its fresh process.
+/// Receives every queued command sample from the robots of this host, bound by their hello
+/// ([`take`] says what each is).
 fn receive(
     subscriber: &Subscriber<ipc::Svc, Command, ()>,
-    robot_of: &mut BTreeMap<UniquePublisherId, u32>,
-    reborn: &mut BTreeSet<u32>,
-    waiting: &mut BTreeSet<u32>,
+    remote_robot: &[bool],
+    hellos: &mut Hellos,
+    pending: &mut BTreeSet<u32>,
     commands: &mut [Option<Command>],
     stats: &mut ShellStats,
 ) -> Result<(), IpcError> {
     while let Some(sample) = subscriber.receive()? {
-        let origin = sample.origin();
+        let origin = Origin::Local(sample.origin());
         let c = *sample.payload();
         drop(sample);
-        let Some(&robot) = robot_of.get(&origin) else {
-            let hello = c.version == PROTOCOL_VERSION
-                && CommandKind::from_u32(c.kind) == Some(CommandKind::Hello);
-            if hello && reborn.remove(&c.robot) {
-                robot_of.insert(origin, c.robot);
-                tracing::debug!(robot = c.robot, pid = c.pid, "restarted robot ready");
-                continue;
-            }
-            stats.unknown_sender += 1;
-            if stats.unknown_sender == 1 {
-                tracing::warn!(
-                    claimed = c.robot,
-                    "command from a publisher that is no robot of this run"
-                );
-            }
-            continue;
-        };
-        if waiting.remove(&robot) {
-            commands[robot as usize] = Some(c);
-        } else {
-            stats.extra_commands += 1;
-        }
+        let local = |r: u32| !remote_robot.get(r as usize).copied().unwrap_or(true);
+        let sample = hellos.accept_claiming(origin, &c, local);
+        take(sample, c, pending, commands, stats);
     }
     Ok(())
 }
@@ -766,14 +829,14 @@ fn receive(
 /// latest (binding restarted robots' fresh processes as in lock-step), and gives up on a
 /// robot that has sent nothing for `unresponsive`. Returns true when the run must stop.
 #[allow(clippy::too_many_arguments)]
-fn collect_realtime(
+fn collect_until(
     subscriber: &Subscriber<ipc::Svc, Command, ()>,
     listener: &Listener<ipc::Svc>,
     node: &Node<ipc::Svc>,
     control: &Receiver<Control>,
     world: &mut World,
-    robot_of: &mut BTreeMap<UniquePublisherId, u32>,
-    reborn: &mut BTreeSet<u32>,
+    remote_robot: &[bool],
+    hellos: &mut Hellos,
     standing: &mut Standing,
     until: Instant,
     unresponsive: Duration,
@@ -787,17 +850,17 @@ fn collect_realtime(
             let c = *sample.payload();
             drop(sample);
             let kind = CommandKind::from_u32(c.kind);
-            let Some(&robot) = robot_of.get(&origin) else {
-                if c.version == PROTOCOL_VERSION
-                    && kind == Some(CommandKind::Hello)
-                    && reborn.remove(&c.robot)
-                {
-                    robot_of.insert(origin, c.robot);
-                    standing.forget(c.robot);
-                } else {
-                    stats.unknown_sender += 1;
+            let local = |r: u32| !remote_robot.get(r as usize).copied().unwrap_or(true);
+            let robot = match hellos.accept_claiming(Origin::Local(origin), &c, local) {
+                Sample::Robot(robot) => robot,
+                Sample::Hello(robot) => {
+                    standing.forget(robot);
+                    continue;
                 }
-                continue;
+                other => {
+                    take(other, c, &mut BTreeSet::new(), &mut [], stats);
+                    continue;
+                }
             };
             let i = robot as usize;
             standing.heard_at[i] = Instant::now();
@@ -815,8 +878,7 @@ fn collect_realtime(
             standing.applied[i] = false;
             standing.fresh[i] = true;
         }
-        let mut none = BTreeSet::new();
-        if drain_control(control, node, world, &mut none)? {
+        if drain_control(control, node, world, hellos, &mut BTreeSet::new())? {
             return Ok(true);
         }
         let now = Instant::now();
@@ -835,7 +897,7 @@ fn collect_realtime(
             .filter(|&r| now.duration_since(standing.heard_at[r as usize]) >= unresponsive)
             .collect();
         for robot in hung {
-            robot_of.retain(|_, r| *r != robot);
+            hellos.forget(robot);
             let waited = now.duration_since(standing.heard_at[robot as usize]);
             give_up(world, robot, waited, "nothing sent");
             standing.forget(robot);
@@ -862,14 +924,16 @@ fn drain_control(
     control: &Receiver<Control>,
     node: &Node<ipc::Svc>,
     world: &mut World,
-    waiting: &mut BTreeSet<u32>,
+    hellos: &mut Hellos,
+    pending: &mut BTreeSet<u32>,
 ) -> Result<bool, IpcError> {
     let mut stop = false;
     loop {
         match control.try_recv() {
             Ok(Control::RobotDied { robot, reason }) => {
                 world.mark_dead(robot, &reason);
-                waiting.remove(&robot);
+                hellos.forget(robot);
+                pending.remove(&robot);
                 // The orchestrator has reaped it, so iceoryx2 sees its node as dead: drop its
                 // ports, returning the observation samples its queue still held.
                 let cleaned = node.try_cleanup_dead_nodes();

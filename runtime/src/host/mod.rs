@@ -1,0 +1,567 @@
+//! The `swarm-host` process: the world's stand-in on a remote host.
+//!
+//! It creates the run's iceoryx2 services in its own root with today's sizing, joins the world
+//! over Zenoh, starts its robots, and then per tick republishes the world's slots for its
+//! robots, wakes them, and sends their commands back in one batch once every robot the world
+//! waits for has answered (or, past the deadline, as they come). It carries out its robots'
+//! faults on the orchestrator's orders, which arrive as lines on its stdin through the
+//! launcher; its reports go back on stdout. On every exit path it removes its resources.
+
+use std::collections::BTreeSet;
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use clap::Parser;
+use crossbeam_channel::Receiver;
+use iceoryx2::identifiers::UniquePublisherId;
+use iceoryx2::port::listener::ListenerWaitError;
+use iceoryx2::prelude::*;
+use serde::Serialize;
+use swarmrt_ipc::cleanup;
+use swarmrt_ipc::{self as ipc, IpcError};
+use swarmrt_protocol::control::{HostControl, HostReport};
+use swarmrt_protocol::services::{RunServices, valid_run_id};
+use swarmrt_protocol::{Command, Observation, ObservationHeader, PROTOCOL_VERSION};
+use zenoh::Wait;
+use zenoh::qos::CongestionControl;
+use zenoh::sample::SampleKind;
+
+use crate::supervisor::hello::{Bindings, Sample};
+use crate::supervisor::launch::{self, Launch};
+use crate::supervisor::{Order, Pid, Reaped, Supervisor};
+use swarmrt_hosts::link;
+use swarmrt_hosts::wire::{Down, Up};
+
+/// How long the host repeats its join before giving up on the world.
+const JOIN_TIMEOUT: Duration = Duration::from_secs(20);
+/// Robots get this long to exit after the shutdown sample, then SIGTERM, then SIGKILL.
+const EXIT_GRACE: Duration = Duration::from_secs(3);
+
+/// The `swarm-host` command line (started by `swarm run --hosts` through the host's launcher).
+#[derive(Parser, Debug)]
+#[command(
+    name = "swarm-host",
+    version,
+    about = "Runs a group of a swarmrt run's robots on this host"
+)]
+struct Args {
+    /// Run id (lower-case hex).
+    #[arg(long)]
+    run_id: String,
+    /// This host's name in hosts.toml.
+    #[arg(long, default_value = "host")]
+    host: String,
+    /// The first robot id this host runs.
+    #[arg(long, default_value_t = 0)]
+    first: u32,
+    /// How many robots this host runs.
+    #[arg(long, default_value_t = 0)]
+    count: u32,
+    /// The world's Zenoh endpoint.
+    #[arg(long, default_value = "")]
+    connect: String,
+    /// Only remove this run's iceoryx2 resources on this host, then exit.
+    #[arg(long)]
+    clean: bool,
+}
+
+/// What the host counted (`metrics.json` -> `hosts`).
+#[derive(Debug, Default, Serialize)]
+pub struct HostStats {
+    /// The host.
+    pub host: String,
+    /// Ticks received.
+    pub ticks: u64,
+    /// Observation slots received: its own robots' only.
+    pub slots_received: u64,
+    /// Bytes received from the world.
+    pub bytes_down: u64,
+    /// Bytes sent to the world.
+    pub bytes_up: u64,
+    /// Command batches sent.
+    pub batches_up: u64,
+    /// Commands forwarded.
+    pub commands_up: u64,
+    /// Batches sent before every awaited robot had answered (past `scenario.deadline_ms`).
+    pub partial_batches: u64,
+    /// Samples from publishers that are no robot of this host.
+    pub unknown_sender: u64,
+    /// Messages from the world that did not decode.
+    pub malformed: u64,
+}
+
+enum Msg {
+    Down(Down, usize),
+    Malformed,
+    WorldLost,
+    Control(HostControl),
+    ControlEof,
+    Exited(Pid, String),
+}
+
+fn report(r: &HostReport) {
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(r.to_line().as_bytes());
+    let _ = out.flush();
+}
+
+/// Entry point of the `swarm-host` binary.
+pub fn main() -> std::process::ExitCode {
+    let args = Args::parse();
+    swarmrt_scenario::process::init_logging();
+    if !valid_run_id(&args.run_id) {
+        eprintln!("error: invalid run id {:?}", args.run_id);
+        return std::process::ExitCode::from(2);
+    }
+    if args.clean {
+        let removed = cleanup::remove_run(&args.run_id);
+        tracing::debug!(removed, "run resources removed");
+        return std::process::ExitCode::SUCCESS;
+    }
+    let span = tracing::info_span!("host", host = %args.host);
+    let _enter = span.enter();
+    if let Err(e) = cleanup::claim(&args.run_id) {
+        let why = format!(
+            "cannot create the run's iceoryx2 directory (is this host's /dev/shm shared with the world's?): {e}"
+        );
+        report(&HostReport::Failed { why });
+        return std::process::ExitCode::from(1);
+    }
+    let result = serve(&args);
+    let removed = cleanup::remove_run(&args.run_id);
+    tracing::debug!(removed, "run resources removed");
+    match result {
+        Ok(stats) => {
+            report(&HostReport::Done {
+                stats: serde_json::to_value(&stats).unwrap_or_default(),
+            });
+            std::process::ExitCode::SUCCESS
+        }
+        Err(e) => {
+            report(&HostReport::Failed { why: e.to_string() });
+            std::process::ExitCode::from(1)
+        }
+    }
+}
+
+fn read_config(run: &RunServices) -> Result<(swarmrt_scenario::Config, String, PathBuf), IpcError> {
+    let mut line = String::new();
+    std::io::stdin().lock().read_line(&mut line)?;
+    let Ok(HostControl::Config { toml }) = serde_json::from_str::<HostControl>(&line) else {
+        return Err("expected the run's config as the first line on stdin".into());
+    };
+    let dir = run.ipc_root().join("host");
+    std::fs::create_dir_all(dir.join("storage"))?;
+    let path = dir.join("config.toml");
+    std::fs::write(&path, &toml)?;
+    let cfg = swarmrt_scenario::Config::load(&path, &[]).map_err(|e| e.to_string())?;
+    Ok((cfg, toml, dir))
+}
+
+fn serve(args: &Args) -> Result<HostStats, IpcError> {
+    let run = RunServices::new(&args.run_id);
+    let (cfg, toml, dir) = read_config(&run)?;
+    let (first, count) = (args.first, args.count as usize);
+    if count == 0 || first as u64 + count as u64 > cfg.robots.count as u64 {
+        return Err(format!(
+            "robots {first}..{} are not robots of this run (robots.count = {})",
+            first as u64 + count as u64,
+            cfg.robots.count
+        )
+        .into());
+    }
+    let agent = std::env::current_exe()?
+        .parent()
+        .map(|d| d.join("swarm-agent"))
+        .filter(|p| p.exists())
+        .ok_or("cannot find swarm-agent beside swarm-host")?;
+    let _ = ipc::raise_fd_limit();
+    let node = ipc::node(&run, &format!("swarmrt-{}-host", args.run_id))?;
+    let observers = cfg.ipc.observers as usize;
+    let services = ipc::create_services(&node, &run, count, cfg.faults.restart.len(), observers)?;
+    let ports = ipc::WorldPorts::open(
+        &services.observations,
+        &services.observations_event,
+        &services.commands,
+        &services.commands_event,
+        count,
+        observers,
+    )?;
+    let (raw_tx, raw_rx) = crossbeam_channel::unbounded::<Msg>();
+    let rx = ipc::wake_relay(&run, format!("swarmrt-{}-host-relay", args.run_id), raw_rx)?;
+    spawn_stdin_reader(raw_tx.clone());
+
+    let session = link::host_session(&args.connect)
+        .map_err(|e| format!("cannot reach the world at {}: {e}", args.connect))?;
+    let tx = raw_tx.clone();
+    let _down = session
+        .declare_subscriber(link::down_key(&args.run_id, &args.host))
+        .callback(move |sample| {
+            let bytes = sample.payload().to_bytes();
+            let _ = tx.send(match Down::decode(&bytes, count) {
+                Ok(d) => Msg::Down(d, bytes.len()),
+                Err(_) => Msg::Malformed,
+            });
+        })
+        .wait()?;
+    let tx = raw_tx.clone();
+    let _world_alive = session
+        .liveliness()
+        .declare_subscriber(link::world_token(&args.run_id))
+        .callback(move |sample| {
+            if sample.kind() == SampleKind::Delete {
+                let _ = tx.send(Msg::WorldLost);
+            }
+        })
+        .wait()?;
+    let up = session
+        .declare_publisher(link::up_key(&args.run_id, &args.host))
+        .congestion_control(CongestionControl::Block)
+        .express(true)
+        .wait()?;
+    let _token = session
+        .liveliness()
+        .declare_token(link::host_token(&args.run_id, &args.host))
+        .wait()?;
+    let mut stats = HostStats {
+        host: args.host.clone(),
+        ..HostStats::default()
+    };
+    let mut send = |msg: &Up, stats: &mut HostStats| -> Result<(), IpcError> {
+        let bytes = msg.encode();
+        stats.bytes_up += bytes.len() as u64;
+        up.put(bytes).wait()?;
+        Ok(())
+    };
+    join(args, &toml, &rx, &mut |m| send(m, &mut stats))?;
+    report(&HostReport::Joined);
+
+    // `cd <this dir> && iox2 service list` on this host sees the run's local services.
+    let ipc_config = dir.join("config/iceoryx2.toml");
+    ipc::write_config_file(&run, &ipc_config)?;
+    let launch = Launch {
+        agent,
+        run: run.clone(),
+        config: dir.join("config.toml"),
+        storage: dir.join("storage"),
+        first,
+        cfg: cfg.clone(),
+        ipc_config,
+        quiet: true,
+    };
+    let robots = first..first + count as u32;
+    let mut relay = Relay {
+        node: &node,
+        ports,
+        tx: raw_tx,
+        launch,
+        sup: Supervisor::new(),
+        bindings: Bindings::awaiting(robots.clone()),
+        robots: robots.clone(),
+        expect: BTreeSet::new(),
+        batch: Vec::new(),
+        tick_at: Instant::now(),
+        flush_each: false,
+        deadline: Duration::from_millis(cfg.scenario.deadline_ms),
+    };
+    for id in robots {
+        if let Some(order) = relay.sup.spawn(id) {
+            relay.carry_out(order)?;
+        }
+    }
+    let failure = relay.run(&rx, &mut stats, &mut send)?;
+
+    // Tell the robots (a header-only sample), then see them out: EXIT_GRACE to exit on it,
+    // then SIGTERM, then SIGKILL.
+    relay.publish(0, 1, &[])?;
+    let Relay { mut sup, ports, .. } = relay;
+    launch::see_out(&mut sup, &rx, EXIT_GRACE, EXIT_GRACE, |sup, m| {
+        if let Msg::Exited(pid, how) = m {
+            reaped(sup, &node, pid, &how);
+        }
+    });
+    // The world waits for this before it closes its session, so the shutdown was delivered.
+    let _ = send(&Up::Bye, &mut stats);
+    drop(ports);
+    drop(services);
+    drop(node);
+    let _ = session.close().wait();
+    match failure {
+        None => Ok(stats),
+        Some(f) => Err(f.into()),
+    }
+}
+
+/// Relays the orchestrator's control lines (through the launcher's stdin) to the main loop.
+fn spawn_stdin_reader(tx: crossbeam_channel::Sender<Msg>) {
+    std::thread::spawn(move || {
+        for line in std::io::stdin().lock().lines() {
+            let Ok(line) = line else { break };
+            match serde_json::from_str::<HostControl>(&line) {
+                Ok(c) => {
+                    if tx.send(Msg::Control(c)).is_err() {
+                        return;
+                    }
+                }
+                Err(e) => tracing::warn!("ignoring control line {line:?}: {e}"),
+            }
+        }
+        let _ = tx.send(Msg::ControlEof);
+    });
+}
+
+/// Joins the world: the join is repeated until the world answers (its subscriber may not
+/// know us yet), for [`JOIN_TIMEOUT`].
+fn join(
+    args: &Args,
+    toml: &str,
+    rx: &Receiver<Msg>,
+    send: &mut dyn FnMut(&Up) -> Result<(), IpcError>,
+) -> Result<(), IpcError> {
+    let join = Up::Join {
+        host: args.host.clone(),
+        layout: link::layout(toml),
+    };
+    let since = Instant::now();
+    loop {
+        send(&join)?;
+        let until = Instant::now() + Duration::from_millis(250);
+        while let Ok(m) = rx.recv_deadline(until) {
+            match m {
+                Msg::Down(Down::Welcome, _) => return Ok(()),
+                Msg::Down(Down::Refuse(why), _) => {
+                    return Err(format!("the world refused this host: {why}").into());
+                }
+                Msg::ControlEof | Msg::Control(HostControl::Stop) => {
+                    return Err("stopped before joining".into());
+                }
+                _ => {}
+            }
+        }
+        if since.elapsed() > JOIN_TIMEOUT {
+            return Err(format!(
+                "the world at {} did not answer the join within {} s",
+                args.connect,
+                JOIN_TIMEOUT.as_secs()
+            )
+            .into());
+        }
+    }
+}
+
+/// The host between the world and its robots: per tick it republishes the world's slots,
+/// wakes the robots and sends their commands back in one batch; it carries out faults.
+struct Relay<'a> {
+    node: &'a Node<ipc::Svc>,
+    ports: ipc::WorldPorts,
+    /// Where the robots' reapers report.
+    tx: crossbeam_channel::Sender<Msg>,
+    launch: Launch,
+    sup: Supervisor,
+    bindings: Bindings<UniquePublisherId>,
+    /// This host's robots.
+    robots: std::ops::Range<u32>,
+    /// The robots of this host the world waits for in the current tick.
+    expect: BTreeSet<u32>,
+    /// Commands not sent up yet.
+    batch: Vec<(u32, Command)>,
+    /// When the current tick's slots were published.
+    tick_at: Instant,
+    /// Send each answer as it comes: a hello arrived, or the tick is past its deadline.
+    flush_each: bool,
+    /// `scenario.deadline_ms`.
+    deadline: Duration,
+}
+
+/// Sends a message up to the world, counting its bytes.
+type SendUp<'s> = dyn FnMut(&Up, &mut HostStats) -> Result<(), IpcError> + 's;
+
+impl Relay<'_> {
+    /// Relays until the world's shutdown, a Stop, or a failure (returned as its reason).
+    fn run(
+        &mut self,
+        rx: &Receiver<Msg>,
+        stats: &mut HostStats,
+        send: &mut SendUp,
+    ) -> Result<Option<String>, IpcError> {
+        loop {
+            self.forward_commands(stats, send)?;
+            for m in rx.try_iter() {
+                if let Some(end) = self.handle(m, stats)? {
+                    return Ok(end);
+                }
+            }
+            let timeout = if !self.expect.is_empty() && !self.flush_each {
+                let waited = self.tick_at.elapsed();
+                if waited >= self.deadline {
+                    // Past the deadline: send what came, then each answer as it comes.
+                    self.flush_each = true;
+                    continue;
+                }
+                self.deadline - waited
+            } else {
+                Duration::from_millis(500)
+            };
+            match self.ports.listener.timed_wait(|_| {}, timeout) {
+                Ok(_) | Err(ListenerWaitError::InterruptSignal) => {
+                    if ipc::termination_requested(self.node) {
+                        return Ok(Some("terminated by a signal".into()));
+                    }
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+    }
+
+    /// The robots' commands, attributed by publisher as the world does on one host, sent up
+    /// once every awaited robot answered (or each as it comes, see `flush_each`).
+    fn forward_commands(
+        &mut self,
+        stats: &mut HostStats,
+        send: &mut SendUp,
+    ) -> Result<(), IpcError> {
+        while let Some(sample) = self.ports.commands.receive()? {
+            let origin = sample.origin();
+            let c = *sample.payload();
+            drop(sample);
+            match self.bindings.accept(origin, &c) {
+                Sample::Robot(robot) => {
+                    self.expect.remove(&robot);
+                    self.batch.push((robot, c));
+                }
+                Sample::Hello(robot) => {
+                    self.batch.push((robot, c));
+                    self.flush_each = true;
+                }
+                Sample::BadHello | Sample::Unknown => stats.unknown_sender += 1,
+            }
+        }
+        if !self.batch.is_empty() && (self.expect.is_empty() || self.flush_each) {
+            if !self.expect.is_empty() {
+                stats.partial_batches += 1;
+            }
+            stats.batches_up += 1;
+            stats.commands_up += self.batch.len() as u64;
+            send(&Up::Commands(std::mem::take(&mut self.batch)), stats)?;
+        }
+        Ok(())
+    }
+
+    /// One message; `Some(end)` ends the run (`end` is the failure, if any).
+    fn handle(
+        &mut self,
+        m: Msg,
+        stats: &mut HostStats,
+    ) -> Result<Option<Option<String>>, IpcError> {
+        match m {
+            Msg::Down(
+                Down::Tick {
+                    tick,
+                    expect,
+                    slots,
+                },
+                bytes,
+            ) => {
+                stats.ticks += 1;
+                stats.slots_received += slots.len() as u64;
+                stats.bytes_down += bytes as u64;
+                if slots.len() != self.robots.len() {
+                    stats.malformed += 1;
+                    return Ok(None);
+                }
+                self.publish(tick, 0, &slots)?;
+                self.expect = expect
+                    .into_iter()
+                    .filter(|r| self.robots.contains(r))
+                    .collect();
+                self.tick_at = Instant::now();
+                self.flush_each = false;
+            }
+            Msg::Down(Down::Shutdown { .. }, bytes) => {
+                stats.bytes_down += bytes as u64;
+                return Ok(Some(None));
+            }
+            Msg::Down(_, _) => {}
+            Msg::Malformed => stats.malformed += 1,
+            Msg::WorldLost => {
+                return Ok(Some(Some(
+                    "lost the world (its session ended or the link was cut)".into(),
+                )));
+            }
+            Msg::Control(HostControl::Stop) => return Ok(Some(None)),
+            Msg::Control(c) => self.order(c)?,
+            Msg::ControlEof => {
+                return Ok(Some(Some("the orchestrator is gone (stdin closed)".into())));
+            }
+            Msg::Exited(pid, how) => reaped(&mut self.sup, self.node, pid, &how),
+        }
+        Ok(None)
+    }
+
+    /// A fault the orchestrator ordered for one of this host's robots.
+    fn order(&mut self, c: HostControl) -> std::io::Result<()> {
+        match c {
+            HostControl::Kill { robot } => {
+                self.bindings.forget(robot);
+                self.sup.kill(robot).iter().for_each(launch::send);
+            }
+            HostControl::Freeze { robot } => self.sup.freeze(robot).iter().for_each(launch::send),
+            HostControl::Thaw { robot } => self.sup.thaw(robot).iter().for_each(launch::send),
+            HostControl::Restart { robot, incarnation } => {
+                self.bindings.expect_hello(robot);
+                for order in self.sup.restart(robot, incarnation) {
+                    self.carry_out(order)?;
+                }
+            }
+            HostControl::Stop | HostControl::Config { .. } => {}
+        }
+        Ok(())
+    }
+
+    /// Publishes the robots' slots of `tick` (or, with `shutdown`, the header-only end).
+    fn publish(&mut self, tick: u64, shutdown: u32, slots: &[Observation]) -> Result<(), IpcError> {
+        let sample = self.ports.publisher.loan_slice_uninit(slots.len())?;
+        let mut sample = sample.write_from_slice(slots);
+        *sample.user_header_mut() = ObservationHeader {
+            version: PROTOCOL_VERSION,
+            shutdown,
+            tick,
+        };
+        sample.send()?;
+        self.ports.notifier.notify()?;
+        Ok(())
+    }
+
+    /// Carries out a supervisor order; a spawned robot is reported as started.
+    fn carry_out(&mut self, order: Order) -> std::io::Result<()> {
+        let Order::Spawn { robot, incarnation } = order else {
+            launch::send(&order);
+            return Ok(());
+        };
+        let tx = self.tx.clone();
+        let pid = launch::spawn(&self.launch, robot, incarnation, move |pid, how| {
+            let _ = tx.send(Msg::Exited(pid, how));
+        })?;
+        self.sup.started(robot, incarnation, pid);
+        report(&HostReport::Started {
+            robot,
+            incarnation,
+            pid,
+        });
+        Ok(())
+    }
+}
+
+fn reaped(sup: &mut Supervisor, node: &Node<ipc::Svc>, pid: Pid, how: &str) {
+    if let Reaped::Robot(e) = sup.reaped(pid, how) {
+        // Its ports go, returning the observation samples it held.
+        let _ = node.try_cleanup_dead_nodes();
+        report(&HostReport::Exited {
+            robot: e.robot,
+            pid,
+            how: e.how,
+            ordered: e.ordered,
+        });
+    }
+}
