@@ -17,7 +17,7 @@ use crossbeam_channel::Sender;
 use swarmrt_hosts::HostsFile;
 use swarmrt_protocol::control::{HostControl, HostReport};
 
-use crate::processes::child_command;
+use swarmrt_scenario::process::{child_command, signal_all};
 
 /// How long the after-run cleanup through one launcher may take.
 const CLEAN_TIMEOUT: Duration = Duration::from_secs(15);
@@ -96,7 +96,7 @@ impl Remotes {
         wrap: fn(usize, HostMsg) -> M,
         watch: impl Fn(i32, crossbeam_channel::Receiver<()>) -> std::io::Result<()>,
     ) -> anyhow::Result<Remotes> {
-        let program = crate::processes::sibling_binary("swarm-host")?;
+        let program = crate::binaries::sibling_binary("swarm-host")?;
         let toml = std::fs::read_to_string(config_path)
             .with_context(|| format!("cannot read {}", config_path.display()))?;
         let config_line = HostControl::Config { toml }.to_line();
@@ -303,7 +303,7 @@ impl Remotes {
 
     /// SIGKILLs every launcher (the fail-fast path; cleanup follows).
     pub fn kill(&mut self) {
-        crate::processes::signal_all(&self.running(), libc::SIGKILL);
+        signal_all(&self.running(), libc::SIGKILL);
     }
 
     /// Every host's counters, by name (`metrics.json` -> `hosts`).
@@ -334,7 +334,7 @@ impl Remotes {
     /// Runs `swarm-host --clean` through every host's launcher, so a host whose `swarm-host`
     /// was killed leaves nothing behind either. Returns the hosts where it failed.
     pub fn clean(&self, run_id: &str) -> Vec<String> {
-        let Ok(program) = crate::processes::sibling_binary("swarm-host") else {
+        let Ok(program) = crate::binaries::sibling_binary("swarm-host") else {
             return self.hosts.iter().map(|h| h.name.clone()).collect();
         };
         let mut failed = Vec::new();
@@ -352,7 +352,7 @@ impl Remotes {
                         let _ = tx.send(c.wait().is_ok_and(|s| s.success()));
                     });
                     rx.recv_timeout(CLEAN_TIMEOUT).unwrap_or_else(|_| {
-                        crate::processes::signal_all(&[pid], libc::SIGKILL);
+                        signal_all(&[pid], libc::SIGKILL);
                         false
                     })
                 }

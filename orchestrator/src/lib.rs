@@ -3,6 +3,7 @@
 #![warn(missing_docs)]
 
 pub use swarmrt_ipc::cleanup;
+pub mod binaries;
 pub mod cli;
 pub mod commands;
 pub mod config;

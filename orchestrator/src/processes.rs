@@ -8,7 +8,7 @@
 
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{ChildStdin, ChildStdout, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -95,26 +95,7 @@ pub fn new_run_id() -> String {
     format!("{:012x}", h & 0xffff_ffff_ffff)
 }
 
-/// Finds `swarm-world` / `swarm-agent` beside the running executable.
-pub fn sibling_binary(name: &str) -> anyhow::Result<PathBuf> {
-    let exe = std::env::current_exe().context("cannot locate the swarm executable")?;
-    let dir = exe.parent().context("executable has no directory")?;
-    let p = dir.join(name);
-    if p.exists() {
-        return Ok(p);
-    }
-    // `cargo test` runs from target/<profile>/deps/.
-    if let Some(up) = dir.parent() {
-        let p = up.join(name);
-        if p.exists() {
-            return Ok(p);
-        }
-    }
-    bail!(
-        "cannot find {name} beside {}; build the whole workspace (cargo build --release)",
-        exe.display()
-    )
-}
+pub use crate::binaries::sibling_binary;
 
 /// The reaper's report of `pid`'s end, as a message on `tx`.
 fn exited(tx: &Sender<Msg>) -> impl FnOnce(Pid, String) + Send + 'static {
