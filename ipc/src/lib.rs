@@ -21,6 +21,7 @@ use swarmrt_protocol::services::{EVENT_COMMAND, EVENT_CONTROL, RunServices};
 use swarmrt_protocol::{Command, Observation, ObservationHeader};
 
 pub mod cleanup;
+pub mod lines;
 
 /// Shortcut for the iceoryx2 service flavour every process uses.
 pub type Svc = ipc::Service;

@@ -7,7 +7,7 @@
 //! robots dead at the current tick; the run goes on and is not reproducible.
 
 use std::collections::BTreeMap;
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{ChildStdin, Stdio};
 use std::time::Duration;
@@ -138,22 +138,17 @@ impl Remotes {
             let stdout = child.stdout.take().context("host stdout")?;
             let tx2 = tx.clone();
             let (eof_tx, eof_rx) = crossbeam_channel::bounded::<()>(0);
-            std::thread::spawn(move || {
-                // Dropped after the last message: the launcher's reaper waits for that.
-                let _eof = eof_tx;
-                for line in BufReader::new(stdout).lines() {
-                    let Ok(line) = line else { break };
-                    match serde_json::from_str::<HostReport>(&line) {
-                        Ok(r) => {
-                            if tx2.send(wrap(i, HostMsg::Report(r))).is_err() {
-                                return;
-                            }
-                        }
-                        Err(_) => tracing::warn!("host {i} said: {line}"),
-                    }
-                }
-                let _ = tx2.send(wrap(i, HostMsg::Eof));
-            });
+            let tx3 = tx2.clone();
+            swarmrt_ipc::lines::read_json_lines(
+                stdout,
+                format!("host {}", h.name),
+                move |r: HostReport| tx2.send(wrap(i, HostMsg::Report(r))).is_ok(),
+                move || {
+                    let _ = tx3.send(wrap(i, HostMsg::Eof));
+                    // Dropped after the last message: the launcher's reaper waits for that.
+                    drop(eof_tx);
+                },
+            );
             hosts.push(Remote {
                 name: h.name.clone(),
                 pid,

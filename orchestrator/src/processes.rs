@@ -7,7 +7,7 @@
 //! and the Ctrl-C relay. No polling.
 
 use std::collections::BTreeMap;
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::path::Path;
 use std::process::{ChildStdin, ChildStdout, Stdio};
 use std::sync::Arc;
@@ -316,21 +316,15 @@ fn start_world(
 
 /// The world's stdout reader: each report line as a message on `tx`, then its EOF.
 fn read_world_reports(world_stdout: ChildStdout, tx: &Sender<Msg>) {
-    let tx = tx.clone();
-    std::thread::spawn(move || {
-        for line in BufReader::new(world_stdout).lines() {
-            let Ok(line) = line else { break };
-            match serde_json::from_str::<WorldReport>(&line) {
-                Ok(r) => {
-                    if tx.send(Msg::Report(r)).is_err() {
-                        return;
-                    }
-                }
-                Err(_) => tracing::warn!("world said: {line}"),
-            }
-        }
-        let _ = tx.send(Msg::WorldEof);
-    });
+    let (tx, eof) = (tx.clone(), tx.clone());
+    swarmrt_ipc::lines::read_json_lines(
+        world_stdout,
+        "the world".into(),
+        move |r: WorldReport| tx.send(Msg::Report(r)).is_ok(),
+        move || {
+            let _ = eof.send(Msg::WorldEof);
+        },
+    );
 }
 
 /// Handles a message while processes are seen out before any robot started: exits are reaped.

@@ -295,20 +295,15 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
 
 /// Relays the orchestrator's control lines (through the launcher's stdin) to the main loop.
 fn spawn_stdin_reader(tx: crossbeam_channel::Sender<Msg>) {
-    std::thread::spawn(move || {
-        for line in std::io::stdin().lock().lines() {
-            let Ok(line) = line else { break };
-            match serde_json::from_str::<HostControl>(&line) {
-                Ok(c) => {
-                    if tx.send(Msg::Control(c)).is_err() {
-                        return;
-                    }
-                }
-                Err(e) => tracing::warn!("ignoring control line {line:?}: {e}"),
-            }
-        }
-        let _ = tx.send(Msg::ControlEof);
-    });
+    let eof = tx.clone();
+    ipc::lines::read_json_lines(
+        std::io::stdin(),
+        "the orchestrator".into(),
+        move |c: HostControl| tx.send(Msg::Control(c)).is_ok(),
+        move || {
+            let _ = eof.send(Msg::ControlEof);
+        },
+    );
 }
 
 /// Joins the world: the join is repeated until the world answers (its subscriber may not

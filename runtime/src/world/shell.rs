@@ -4,7 +4,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use std::io::{BufRead, Write};
+use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -367,21 +367,16 @@ fn report(r: &WorldReport) {
 /// Relays control lines from stdin to the main loop and wakes it through the command event.
 fn spawn_control_thread(run: &RunServices) -> Result<Receiver<Control>, IpcError> {
     let (tx, rx) = crossbeam_channel::unbounded();
-    std::thread::spawn(move || {
-        for line in std::io::stdin().lock().lines() {
-            let Ok(line) = line else { break };
-            match serde_json::from_str::<Control>(&line) {
-                Ok(c) => {
-                    if tx.send(c).is_err() {
-                        return;
-                    }
-                }
-                Err(e) => tracing::warn!("ignoring control line {line:?}: {e}"),
-            }
-        }
+    let eof = tx.clone();
+    ipc::lines::read_json_lines(
+        std::io::stdin(),
+        "the orchestrator".into(),
+        move |c: Control| tx.send(c).is_ok(),
         // EOF: the orchestrator is gone; finish the records and stop.
-        let _ = tx.send(Control::Stop);
-    });
+        move || {
+            let _ = eof.send(Control::Stop);
+        },
+    );
     ipc::wake_relay(run, format!("{}-control", run.world_node_name()), rx)
 }
 
