@@ -37,26 +37,44 @@ pub fn world_token(run_id: &str) -> String {
     format!("swarmrt/{run_id}/alive-world")
 }
 
-fn common(mode: &str) -> String {
+/// The largest message a link carries for a host of `robots` robots: a tick's slots down, or
+/// up to `2 * robots + 8` commands up (what [`crate::wire::Up::decode`] accepts), with room
+/// for framing. Zenoh drops a larger message instead of reassembling up to its default 1 GiB.
+pub fn max_message_size(robots: usize) -> usize {
+    let per = std::mem::size_of::<Observation>().max(std::mem::size_of::<Command>()) + 16;
+    64 * 1024 + (2 * robots + 8) * per
+}
+
+fn common(mode: &str, max_message: usize, max_sessions: usize) -> String {
     format!(
         r#"{{
             mode: "{mode}",
             scouting: {{ multicast: {{ enabled: false }}, gossip: {{ enabled: true }} }},
-            transport: {{ link: {{ tx: {{ lease: {LEASE_MS} }} }} }},
+            transport: {{
+                unicast: {{ max_sessions: {max_sessions} }},
+                link: {{ tx: {{ lease: {LEASE_MS} }}, rx: {{ max_message_size: {max_message} }} }},
+            }},
         }}"#
     )
 }
 
-/// The world's session: listens on `listen`, connects nowhere.
-pub fn world_session(listen: &str) -> Result<zenoh::Session, LinkError> {
-    let mut c = zenoh::Config::from_json5(&common("peer"))?;
+/// The world's session: listens on `listen`, connects nowhere; at most one session per host
+/// and one more (a host restarting while its old session times out), messages of at most
+/// [`max_message_size`] for its largest host (`robots`).
+pub fn world_session(
+    listen: &str,
+    hosts: usize,
+    robots: usize,
+) -> Result<zenoh::Session, LinkError> {
+    let mut c = zenoh::Config::from_json5(&common("peer", max_message_size(robots), hosts + 1))?;
     c.insert_json5("listen/endpoints", &serde_json::to_string(&[listen])?)?;
     zenoh::open(c).wait()
 }
 
-/// A host's session: a client of the world at `connect`, trying for up to 10 s.
-pub fn host_session(connect: &str) -> Result<zenoh::Session, LinkError> {
-    let mut c = zenoh::Config::from_json5(&common("client"))?;
+/// A host's session: a client of the world at `connect`, trying for up to 10 s, for a host
+/// of `robots` robots.
+pub fn host_session(connect: &str, robots: usize) -> Result<zenoh::Session, LinkError> {
+    let mut c = zenoh::Config::from_json5(&common("client", max_message_size(robots), 1))?;
     c.insert_json5("connect/endpoints", &serde_json::to_string(&[connect])?)?;
     c.insert_json5("connect/timeout_ms", "10000")?;
     c.insert_json5("connect/exit_on_failure", "true")?;

@@ -446,4 +446,39 @@ mod tests {
         assert!(Up::decode(&[0xff, 1, 2], 4).is_err());
         assert!(Up::decode(&[], 4).is_err());
     }
+
+    /// The link's size bound lets the largest legitimate messages through: every slot full
+    /// (all lidar rays, neighbours and inbox frames) down, the most commands `Up::decode`
+    /// accepts up.
+    #[test]
+    fn the_largest_legitimate_messages_fit_the_links_bound() {
+        for robots in [1usize, 10, 450] {
+            let mut full = Observation::empty(0, 0);
+            full.lidar_len = MAX_LIDAR_RAYS as u16;
+            full.neighbours_len = full.neighbours.len() as u16;
+            full.inbox_len = full.inbox.len() as u16;
+            for f in full.inbox.iter_mut() {
+                f.len = f.payload.len() as u16;
+            }
+            let expect: Vec<u32> = (0..robots as u32).collect();
+            let down = encode_tick(u64::MAX, &expect, &vec![full; robots]);
+            let mut c = Command::act(0, 0);
+            c.outbox_len = c.outbox.len() as u16;
+            for f in c.outbox.iter_mut() {
+                f.len = f.payload.len() as u16;
+            }
+            let up = Up::Commands(vec![(0, c); 2 * robots + 8]).encode();
+            let bound = crate::link::max_message_size(robots);
+            assert!(
+                down.len() < bound,
+                "{robots} robots: down {} >= {bound}",
+                down.len()
+            );
+            assert!(
+                up.len() < bound,
+                "{robots} robots: up {} >= {bound}",
+                up.len()
+            );
+        }
+    }
 }

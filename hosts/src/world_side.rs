@@ -3,6 +3,8 @@
 //! threads and queued; the world's shell relays them into its main loop (`swarmrt_ipc::wake_relay`).
 
 use std::ops::Range;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crossbeam_channel::{Receiver, Sender};
 use serde::Serialize;
@@ -55,6 +57,18 @@ pub struct HostTraffic {
     pub messages_up: u64,
     /// Messages from it that did not decode.
     pub malformed: u64,
+    /// Messages from it dropped because the world's queue was full (a flood): never queued,
+    /// so memory stays bounded.
+    pub dropped: u64,
+    /// Joins refused after it had joined (wrong build, config or name); the run goes on.
+    pub bad_joins: u64,
+}
+
+/// How many messages from the hosts may wait for the world's loop: a tick brings at most one
+/// batch per host plus one message per robot answering past the deadline, so this is many
+/// ticks' worth; past it a message is dropped and counted.
+pub fn queue_capacity(hosts: usize, robots: usize) -> usize {
+    1024 + 8 * (hosts + robots)
 }
 
 struct Remote {
@@ -66,6 +80,8 @@ struct Remote {
 pub struct WorldLink {
     hosts: Vec<Remote>,
     traffic: Vec<HostTraffic>,
+    /// Per host: messages dropped on a full queue (counted on Zenoh's threads).
+    dropped: Vec<Arc<AtomicU64>>,
     _subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
     _liveliness: zenoh::pubsub::Subscriber<()>,
     _token: zenoh::liveliness::LivelinessToken,
@@ -76,11 +92,14 @@ impl WorldLink {
     /// Listens on the file's endpoint and declares every host's ports. Messages from hosts
     /// arrive on the returned receiver.
     pub fn open(file: &HostsFile, run_id: &str) -> Result<(WorldLink, Receiver<Heard>), LinkError> {
-        let session = link::world_session(&file.listen)
+        let largest = file.hosts.iter().map(|h| h.robots.len()).max().unwrap_or(0);
+        let robots: usize = file.hosts.iter().map(|h| h.robots.len()).sum();
+        let session = link::world_session(&file.listen, file.hosts.len(), largest)
             .map_err(|e| format!("cannot listen on {}: {e}", file.listen))?;
-        let (tx, rx) = crossbeam_channel::unbounded();
+        let (tx, rx) = crossbeam_channel::bounded(queue_capacity(file.hosts.len(), robots));
         let mut hosts = Vec::new();
         let mut subscribers = Vec::new();
+        let mut dropped = Vec::new();
         for (i, h) in file.hosts.iter().enumerate() {
             let down = session
                 .declare_publisher(link::down_key(run_id, &h.name))
@@ -89,6 +108,8 @@ impl WorldLink {
                 .wait()?;
             let tx: Sender<Heard> = tx.clone();
             let max = 2 * h.robots.len() + 8;
+            let drops = Arc::new(AtomicU64::new(0));
+            dropped.push(drops.clone());
             let sub = session
                 .declare_subscriber(link::up_key(run_id, &h.name))
                 .callback(move |sample| {
@@ -101,7 +122,9 @@ impl WorldLink {
                         },
                         Err(_) => Heard::Malformed { host: i },
                     };
-                    let _ = tx.send(heard);
+                    if tx.try_send(heard).is_err() {
+                        drops.fetch_add(1, Ordering::Relaxed);
+                    }
                 })
                 .wait()?;
             subscribers.push(sub);
@@ -144,6 +167,7 @@ impl WorldLink {
             WorldLink {
                 hosts,
                 traffic,
+                dropped,
                 _subscribers: subscribers,
                 _liveliness: liveliness,
                 _token: token,
@@ -193,8 +217,16 @@ impl WorldLink {
         }
     }
 
+    /// Counts a `Join` refused after the host had joined.
+    pub fn count_bad_join(&mut self, host: usize) {
+        self.traffic[host].bad_joins += 1;
+    }
+
     /// Traffic so far, per host.
-    pub fn traffic(&self) -> &[HostTraffic] {
+    pub fn traffic(&mut self) -> &[HostTraffic] {
+        for (t, d) in self.traffic.iter_mut().zip(&self.dropped) {
+            t.dropped = d.load(Ordering::Relaxed);
+        }
         &self.traffic
     }
 

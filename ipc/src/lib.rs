@@ -378,7 +378,11 @@ pub fn wake_relay<T: Send + 'static>(
     node_name: String,
     from: crossbeam_channel::Receiver<T>,
 ) -> Result<crossbeam_channel::Receiver<T>, IpcError> {
-    let (tx, rx) = crossbeam_channel::unbounded();
+    // As bounded as what it relays: a full queue stops the relay, not the bound.
+    let (tx, rx) = match from.capacity() {
+        Some(cap) => crossbeam_channel::bounded(cap),
+        None => crossbeam_channel::unbounded(),
+    };
     let (ready_tx, ready_rx) = crossbeam_channel::bounded::<Result<(), String>>(1);
     let run = run.clone();
     std::thread::Builder::new()

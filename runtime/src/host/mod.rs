@@ -192,7 +192,7 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
     let rx = ipc::wake_relay(&run, format!("swarmrt-{}-host-relay", args.run_id), raw_rx)?;
     spawn_stdin_reader(raw_tx.clone());
 
-    let session = link::host_session(&args.connect)
+    let session = link::host_session(&args.connect, count)
         .map_err(|e| format!("cannot reach the world at {}: {e}", args.connect))?;
     let tx = raw_tx.clone();
     let _down = session

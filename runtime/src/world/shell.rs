@@ -257,7 +257,14 @@ impl Remote {
                                     self.names[host], self.layout
                                 );
                                 self.link.send(host, &Down::Refuse(why.clone()))?;
-                                return Err(why.into());
+                                if !self.joined[host] {
+                                    // Before it joined: the run cannot start as configured.
+                                    return Err(why.into());
+                                }
+                                // After: refused and counted; the joined host goes on.
+                                self.link.count_bad_join(host);
+                                tracing::warn!("refused a second join: {why}");
+                                continue;
                             }
                             self.joined[host] = true;
                             self.link.send(host, &Down::Welcome)?;
