@@ -36,15 +36,16 @@ pub fn to_csv(s: &Series) -> String {
     out
 }
 
-/// Writes every table of the run in `dir` (atomically: temp file, then rename) and its
-/// plots; returns the files written.
+/// Writes every table of the run in `dir` (atomically: temp file, then rename; a symbolic
+/// link planted at either name is refused, never followed) and its plots; returns the files
+/// written.
 pub fn write_all(cfg: &Config, dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
     let mut written = Vec::new();
     for s in from_records(cfg, dir)? {
         let path = dir.join(format!("{}.csv", s.name));
-        let tmp = dir.join(format!("{}.csv.tmp", s.name));
-        std::fs::write(&tmp, to_csv(&s)).with_context(|| format!("writing {}", tmp.display()))?;
-        std::fs::rename(&tmp, &path)?;
+        // Through `<name>.csv.tmp`, as before.
+        swarmrt_scenario::safe_fs::write_replace_nofollow(&path, to_csv(&s))
+            .with_context(|| format!("writing {}", path.display()))?;
         written.push(path);
         for plot in &s.plots {
             let svg = dir.join(format!("{}.svg", plot.file));

@@ -4,7 +4,7 @@
 //! `swarm-bench child --spec <json>` subcommand ([`child`]). The parent holds no iceoryx2
 //! node (so children never inherit its descriptors); it only spawns, reads one JSON line of
 //! results per child over a pipe, and reaps. Each measurement claims its own run id, so its
-//! iceoryx2 root (`/dev/shm/swarmrt-iceoryx2/<id>/`) and shared-memory prefix are its own, and
+//! iceoryx2 root (`/dev/shm/swarmrt-<euid>/<id>/`) and shared-memory prefix are its own, and
 //! removing them afterwards is exact; `swarm clean` finds them if the parent was killed.
 //!
 //! - [`cli`]: the command line; the only module that knows clap.

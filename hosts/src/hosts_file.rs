@@ -2,13 +2,21 @@
 //!
 //! ```toml
 //! [world]
-//! listen = "tcp/10.0.0.1:7447"      # the world's Zenoh endpoint; every host connects here
+//! listen = "quic/10.0.0.1:7447"     # the world's Zenoh endpoint; every host connects here
+//! certs = "certs"                    # what `swarm certs hosts.toml` wrote (default: certs/
+//!                                    # beside this file)
 //!
 //! [[host]]
 //! name = "rack-a"
 //! launcher = ["ssh", "rack-a"]       # prefixed to the swarm-host command line
 //! robots = 40                        # a count, or an id range "20..60"
 //! ```
+//!
+//! `quic/` endpoints (the default: TLS 1.3 over UDP) authenticate both ends with certificates
+//! of one CA ([`crate::certs`]); `tcp/` trusts anyone on the network and needs
+//! `--insecure-link`. Zenoh's `tls/` (over TCP) is refused: in zenoh 1.10 it drops the link
+//! about once a second under a lock-step's steady traffic (zenoh issue #2557), each drop
+//! looking like a lost host.
 //!
 //! Counts are laid out from the top ids down in file order, so the world's host keeps the
 //! lowest ids; ranges are half-open and must not overlap. Robots no host names run beside the
@@ -25,6 +33,9 @@ use swarmrt_scenario::ConfigError;
 pub struct HostsFile {
     /// The world's listening endpoint.
     pub listen: String,
+    /// The directory of the run's certificates on the world's host (`world.certs`, relative
+    /// to the hosts file): the CA, the world's and every host's ([`crate::certs`]).
+    pub certs: PathBuf,
     /// The remote hosts, in file order.
     pub hosts: Vec<Host>,
 }
@@ -42,6 +53,8 @@ pub struct Host {
     pub connect: String,
     /// The `swarm-host` executable on that host (default: the one beside `swarm` here).
     pub program: Option<PathBuf>,
+    /// Where its certificate, key and the CA are on that host (default: the world's `certs`).
+    pub certs: PathBuf,
 }
 
 #[derive(Deserialize)]
@@ -56,6 +69,7 @@ struct RawFile {
 #[serde(deny_unknown_fields)]
 struct RawWorld {
     listen: String,
+    certs: Option<PathBuf>,
 }
 
 #[derive(Deserialize)]
@@ -66,6 +80,7 @@ struct RawHost {
     robots: RawRobots,
     connect: Option<String>,
     program: Option<PathBuf>,
+    certs: Option<PathBuf>,
 }
 
 #[derive(Deserialize)]
@@ -75,16 +90,28 @@ enum RawRobots {
     Range(String),
 }
 
-/// Checks a Zenoh TCP endpoint `tcp/<address>:<port>`.
+/// Checks a Zenoh endpoint `quic/<address>:<port>` (or `tcp/`, see [`HostsFile::is_secure`]).
 fn check_endpoint(file: &str, key: &str, e: &str) -> Result<(), ConfigError> {
     let bad = || {
         ConfigError::new(
             file,
             key,
-            format!("expected a Zenoh endpoint \"tcp/<address>:<port>\", found {e:?}"),
+            format!("expected a Zenoh endpoint \"quic/<address>:<port>\", found {e:?}"),
         )
     };
-    let rest = e.strip_prefix("tcp/").ok_or_else(bad)?;
+    if e.starts_with("tls/") {
+        return Err(ConfigError::new(
+            file,
+            key,
+            format!(
+                "{e:?}: use quic/ instead of tls/ (the same certificates and checks; zenoh 1.10's tls/ link drops under steady traffic, zenoh issue #2557)"
+            ),
+        ));
+    }
+    let rest = e
+        .strip_prefix("quic/")
+        .or_else(|| e.strip_prefix("tcp/"))
+        .ok_or_else(bad)?;
     let (addr, port) = rest.rsplit_once(':').ok_or_else(bad)?;
     if addr.is_empty() || port.parse::<u16>().map_or(true, |p| p == 0) {
         return Err(bad());
@@ -146,6 +173,11 @@ impl HostsFile {
                 ConfigError::new(file, key, e.inner().to_string().replace('\n', " "))
             })?;
         check_endpoint(file, "world.listen", &raw.world.listen)?;
+        // Relative to the hosts file, like a path in a config.
+        let beside = Path::new(file).parent().unwrap_or(Path::new(""));
+        let certs = beside.join(raw.world.certs.as_deref().unwrap_or(Path::new("certs")));
+        // Absolute, so the world (started elsewhere) and the hosts' launchers find them too.
+        let certs = std::path::absolute(&certs).unwrap_or(certs);
         if raw.host.is_empty() {
             return Err(ConfigError::new(
                 file,
@@ -236,7 +268,18 @@ impl HostsFile {
             };
             let connect = h.connect.unwrap_or_else(|| raw.world.listen.clone());
             check_endpoint(file, &key("connect"), &connect)?;
+            let scheme = |e: &str| e.split_once('/').map(|(s, _)| s.to_string());
+            if scheme(&connect) != scheme(&raw.world.listen) {
+                return Err(ConfigError::new(
+                    file,
+                    key("connect"),
+                    format!(
+                        "{connect:?} does not use world.listen's scheme: every end of the link must be quic/, or every end tcp/"
+                    ),
+                ));
+            }
             hosts.push(Host {
+                certs: h.certs.unwrap_or_else(|| certs.clone()),
                 name: h.name,
                 launcher: h.launcher,
                 robots: range,
@@ -246,8 +289,26 @@ impl HostsFile {
         }
         Ok(HostsFile {
             listen: raw.world.listen,
+            certs,
             hosts,
         })
+    }
+
+    /// True when the link is mutually authenticated TLS (`quic/` endpoints); `tcp/` trusts
+    /// anyone who can reach the world's port and needs `--insecure-link`.
+    pub fn is_secure(&self) -> bool {
+        self.listen.starts_with("quic/")
+    }
+
+    /// The one line `swarm run` refuses an insecure link with, unless the user said
+    /// `--insecure-link`.
+    pub fn insecure_refusal(&self, file: &Path) -> String {
+        format!(
+            "{}: world.listen {:?} is plain TCP: anyone who can reach it could read the run and pose as a host; use quic/ endpoints (`swarm certs {}` makes the certificates) or pass --insecure-link on a private lab network",
+            file.display(),
+            self.listen,
+            file.display()
+        )
     }
 
     /// The host running `robot`, if a remote one does.
@@ -315,7 +376,7 @@ connect = "tcp/10.0.1.1:7447"
         assert!(e.contains("h.toml") && e.contains("host[1].robots"), "{e}");
         let e = err(&GOOD.replace("tcp/10.0.0.1:7447", "udp/x"), 10);
         assert!(
-            e.contains("world.listen") && e.contains("tcp/<address>:<port>"),
+            e.contains("world.listen") && e.contains("quic/<address>:<port>"),
             "{e}"
         );
         let e = err(&GOOD.replace("name = \"b\"", "name = \"a\""), 10);
@@ -334,5 +395,28 @@ connect = "tcp/10.0.1.1:7447"
         assert!(e.contains("host[0].launcher"), "{e}");
         let e = err(&GOOD.replace("robots = 4", "robots = 4\nport = 3"), 10);
         assert!(e.contains("port"), "{e}");
+    }
+
+    #[test]
+    fn every_end_of_the_link_uses_one_scheme_and_tls_is_secure() {
+        let tls = GOOD.replace("tcp/", "quic/");
+        let h = HostsFile::parse("h.toml", &tls, 10).unwrap();
+        assert!(h.is_secure());
+        assert!(h.certs.is_absolute() && h.certs.ends_with("certs"));
+        assert!(h.hosts.iter().all(|x| x.certs == h.certs));
+        assert!(!HostsFile::parse("h.toml", GOOD, 10).unwrap().is_secure());
+        let mixed = tls.replacen("quic/10.0.1.1", "tcp/10.0.1.1", 1);
+        let e = HostsFile::parse("h.toml", &mixed, 10)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("host[1].connect") && e.contains("every end"),
+            "{e}"
+        );
+        let old = GOOD.replace("tcp/", "tls/");
+        let e = HostsFile::parse("h.toml", &old, 10)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("world.listen") && e.contains("use quic/"), "{e}");
     }
 }

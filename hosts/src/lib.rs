@@ -9,6 +9,7 @@
 //!
 //! The `swarm-host` process itself is `swarmrt_runtime::host`, beside the other process shells.
 
+pub mod certs;
 pub mod hosts_file;
 pub mod link;
 pub mod wire;

@@ -6,8 +6,10 @@
 //! listens; each host's session is a client of it, so a host receives only what it
 //! subscribed to: its own observation slots.
 
+use std::path::Path;
 use swarmrt_protocol::PROTOCOL_VERSION;
 use swarmrt_protocol::messages::{Command, MAX_INBOX, MAX_LIDAR_RAYS, MAX_OUTBOX, Observation};
+
 use zenoh::Wait;
 
 /// Error type of the link.
@@ -45,6 +47,26 @@ pub fn max_message_size(robots: usize) -> usize {
     64 * 1024 + (2 * robots + 8) * per
 }
 
+/// How one end of the link proves who it is.
+#[derive(Debug, Clone, Copy)]
+pub enum Tls<'a> {
+    /// Mutual TLS (`quic/` endpoints): both ends present a certificate of the run's CA.
+    Mutual {
+        /// The run's CA certificate: the only one this end trusts.
+        ca: &'a Path,
+        /// This end's certificate.
+        cert: &'a Path,
+        /// Its private key.
+        key: &'a Path,
+    },
+    /// Plain TCP (`tcp/`, `--insecure-link`): nobody proves anything.
+    Insecure,
+}
+
+fn json(s: &Path) -> Result<String, LinkError> {
+    Ok(serde_json::to_string(&s.display().to_string())?)
+}
+
 fn common(mode: &str, max_message: usize, max_sessions: usize) -> String {
     format!(
         r#"{{
@@ -58,23 +80,113 @@ fn common(mode: &str, max_message: usize, max_sessions: usize) -> String {
     )
 }
 
+/// `side` is "listen" (the world) or "connect" (a host). The world's certificate must name
+/// the address a host connects to (zenoh checks it); the world matches hosts by the common
+/// name of theirs ([`world_acl`]).
+fn set_tls(c: &mut zenoh::Config, side: &str, tls: Tls) -> Result<(), LinkError> {
+    if let Tls::Mutual { ca, cert, key } = tls {
+        c.insert_json5("transport/link/tls/root_ca_certificate", &json(ca)?)?;
+        c.insert_json5(
+            &format!("transport/link/tls/{side}_certificate"),
+            &json(cert)?,
+        )?;
+        c.insert_json5(
+            &format!("transport/link/tls/{side}_private_key"),
+            &json(key)?,
+        )?;
+        c.insert_json5("transport/link/tls/enable_mtls", "true")?;
+        c.insert_json5("transport/link/tls/verify_name_on_connect", "true")?;
+        c.insert_json5("transport/link/tls/close_link_on_expiration", "true")?;
+    }
+    Ok(())
+}
+
+/// The world's access control, default deny: host `h` (a TLS peer whose certificate's common
+/// name is `h`) may publish only on its up key, subscribe only to its down key (and receive
+/// the world's samples there), declare only its own liveliness token and watch the world's.
+/// Nothing else passes, in either direction.
+pub fn world_acl(run_id: &str, hosts: &[&str]) -> String {
+    let mut rules = Vec::new();
+    let mut subjects = Vec::new();
+    let mut policies = Vec::new();
+    for h in hosts {
+        let (up, down) = (up_key(run_id, h), down_key(run_id, h));
+        let (token, world) = (host_token(run_id, h), world_token(run_id));
+        let mine = [
+            ("in-put-up", "ingress", "put", up.as_str()),
+            (
+                "in-sub-down",
+                "ingress",
+                "declare_subscriber",
+                down.as_str(),
+            ),
+            ("out-put-down", "egress", "put", down.as_str()),
+            // The world's subscriber on the up key, announced to the host so it sends there.
+            ("out-sub-up", "egress", "declare_subscriber", up.as_str()),
+            ("in-token", "ingress", "liveliness_token", token.as_str()),
+            (
+                "in-watch-world",
+                "ingress",
+                "declare_liveliness_subscriber",
+                world.as_str(),
+            ),
+            (
+                "out-token-world",
+                "egress",
+                "liveliness_token",
+                world.as_str(),
+            ),
+        ];
+        let mut ids = Vec::new();
+        for (id, flow, message, key) in mine {
+            let id = format!("{h}-{id}");
+            rules.push(format!(
+                r#"{{ id: "{id}", flows: ["{flow}"], messages: ["{message}"], permission: "allow", key_exprs: ["{key}"] }}"#
+            ));
+            ids.push(format!("\"{id}\""));
+        }
+        subjects.push(format!(
+            r#"{{ id: "host-{h}", cert_common_names: ["{h}"], link_protocols: ["quic"] }}"#
+        ));
+        policies.push(format!(
+            r#"{{ id: "policy-{h}", rules: [{}], subjects: ["host-{h}"] }}"#,
+            ids.join(", ")
+        ));
+    }
+    format!(
+        r#"{{ enabled: true, default_permission: "deny", rules: [{}], subjects: [{}], policies: [{}] }}"#,
+        rules.join(", "),
+        subjects.join(", "),
+        policies.join(", ")
+    )
+}
+
 /// The world's session: listens on `listen`, connects nowhere; at most one session per host
 /// and one more (a host restarting while its old session times out), messages of at most
-/// [`max_message_size`] for its largest host (`robots`).
+/// [`max_message_size`] for its largest host (`robots`). With TLS, `hosts` may do only what
+/// [`world_acl`] allows.
 pub fn world_session(
     listen: &str,
-    hosts: usize,
+    run_id: &str,
+    hosts: &[&str],
     robots: usize,
+    tls: Tls,
 ) -> Result<zenoh::Session, LinkError> {
-    let mut c = zenoh::Config::from_json5(&common("peer", max_message_size(robots), hosts + 1))?;
+    let mut c =
+        zenoh::Config::from_json5(&common("peer", max_message_size(robots), hosts.len() + 1))?;
     c.insert_json5("listen/endpoints", &serde_json::to_string(&[listen])?)?;
+    set_tls(&mut c, "listen", tls)?;
+    if matches!(tls, Tls::Mutual { .. }) {
+        c.insert_json5("access_control", &world_acl(run_id, hosts))?;
+    }
     zenoh::open(c).wait()
 }
 
 /// A host's session: a client of the world at `connect`, trying for up to 10 s, for a host
 /// of `robots` robots.
-pub fn host_session(connect: &str, robots: usize) -> Result<zenoh::Session, LinkError> {
+pub fn host_session(connect: &str, robots: usize, tls: Tls) -> Result<zenoh::Session, LinkError> {
     let mut c = zenoh::Config::from_json5(&common("client", max_message_size(robots), 1))?;
+    set_tls(&mut c, "connect", tls)?;
     c.insert_json5("connect/endpoints", &serde_json::to_string(&[connect])?)?;
     c.insert_json5("connect/timeout_ms", "10000")?;
     c.insert_json5("connect/exit_on_failure", "true")?;

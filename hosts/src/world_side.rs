@@ -94,7 +94,21 @@ impl WorldLink {
     pub fn open(file: &HostsFile, run_id: &str) -> Result<(WorldLink, Receiver<Heard>), LinkError> {
         let largest = file.hosts.iter().map(|h| h.robots.len()).max().unwrap_or(0);
         let robots: usize = file.hosts.iter().map(|h| h.robots.len()).sum();
-        let session = link::world_session(&file.listen, file.hosts.len(), largest)
+        let names: Vec<&str> = file.hosts.iter().map(|h| h.name.as_str()).collect();
+        let (ca, (cert, key)) = (
+            crate::certs::ca_cert(&file.certs),
+            crate::certs::world_pair(&file.certs),
+        );
+        let tls = if file.is_secure() {
+            link::Tls::Mutual {
+                ca: &ca,
+                cert: &cert,
+                key: &key,
+            }
+        } else {
+            link::Tls::Insecure
+        };
+        let session = link::world_session(&file.listen, run_id, &names, largest, tls)
             .map_err(|e| format!("cannot listen on {}: {e}", file.listen))?;
         let (tx, rx) = crossbeam_channel::bounded(queue_capacity(file.hosts.len(), robots));
         let mut hosts = Vec::new();

@@ -30,7 +30,8 @@ fn a_flood_is_dropped_and_counted_and_oversized_messages_never_arrive() {
     let capacity = queue_capacity(1, 2);
     assert_eq!(heard.capacity(), Some(capacity));
 
-    let host = link::host_session(&format!("tcp/127.0.0.1:{port}"), 2).unwrap();
+    let host =
+        link::host_session(&format!("tcp/127.0.0.1:{port}"), 2, link::Tls::Insecure).unwrap();
     let up = host
         .declare_publisher(link::up_key(run_id, "a"))
         .congestion_control(zenoh::qos::CongestionControl::Block)

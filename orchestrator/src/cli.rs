@@ -26,6 +26,9 @@ pub enum Cmd {
     Plan(PlanArgs),
     /// Remove the iceoryx2 files and shared memory of runs whose orchestrator is gone.
     Clean,
+    /// Make the certificates of a multi-host run: a CA, the world's and every host's
+    /// certificate and key (keys 0600), for `quic/` endpoints (docs/security.md).
+    Certs(CertsArgs),
     /// Run a scenario over the cross product of varied keys and seeds; write sweep.csv and plots.
     Sweep(SweepArgs),
     /// Tune numeric config keys with noise-resistant PSO against a metric; write tune.csv,
@@ -71,6 +74,10 @@ pub struct RunArgs {
     /// Run the robots a hosts file names on other hosts, over Zenoh (docs/multihost.md).
     #[arg(long, value_name = "HOSTS.TOML", conflicts_with = "in_process")]
     pub hosts: Option<PathBuf>,
+    /// Allow a hosts file's plain `tcp/` endpoints: no authentication, no encryption, for a
+    /// private lab network only (docs/security.md).
+    #[arg(long, requires = "hosts")]
+    pub insecure_link: bool,
     /// Tick by the wall clock (one tick every scenario.dt seconds) and apply whatever
     /// commands arrived; a robot that missed a tick keeps its last command. Not reproducible.
     #[arg(long, conflicts_with_all = ["in_process", "hosts"])]
@@ -126,6 +133,16 @@ pub struct CheckArgs {
     /// Also check a hosts file against the config and print which host runs which robots.
     #[arg(long, value_name = "HOSTS.TOML")]
     pub hosts: Option<PathBuf>,
+}
+
+/// `swarm certs`.
+#[derive(Parser, Debug)]
+pub struct CertsArgs {
+    /// The hosts file whose world and hosts get certificates.
+    pub hosts: PathBuf,
+    /// Where to write them (default: the hosts file's `world.certs`, `certs/` beside it).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 /// `swarm plan`.

@@ -112,6 +112,8 @@ impl Remotes {
                 .args(["--first", &h.robots.start.to_string()])
                 .args(["--count", &h.robots.len().to_string()])
                 .args(["--connect", &h.connect])
+                .arg("--certs")
+                .arg(&h.certs)
                 .stdin(Stdio::piped())
                 .stdout(Stdio::piped());
             let mut child = match cmd.spawn() {

@@ -24,6 +24,7 @@ fn main() -> std::process::ExitCode {
         Cmd::Check(args) => commands::check::check(args),
         Cmd::Plan(args) => commands::plan::plan(args),
         Cmd::Clean => commands::clean::clean(),
+        Cmd::Certs(args) => commands::certs::certs(args),
         Cmd::Sweep(args) => commands::sweep::sweep(args, rx),
         Cmd::Tune(args) => commands::tune::tune(args, rx),
         // Dispatched above, before the handler exists; here only to keep the match whole.

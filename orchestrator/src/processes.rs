@@ -161,6 +161,8 @@ pub struct RunOptions<'a> {
     /// The world ticks by the wall clock and applies whatever commands arrived
     /// (`swarm run --realtime`).
     pub realtime: bool,
+    /// The hosts file's `tcp/` endpoints are allowed (`swarm run --insecure-link`).
+    pub insecure_link: bool,
 }
 
 /// [`run`] with `opts`.
@@ -280,6 +282,10 @@ fn world_command(
         .arg(dir);
     if let Some(h) = opts.hosts {
         world_cmd.arg("--hosts").arg(&h.path);
+        world_cmd.arg("--certs").arg(&h.file.certs);
+    }
+    if opts.insecure_link {
+        world_cmd.arg("--insecure-link");
     }
     if opts.realtime {
         world_cmd.arg("--realtime");

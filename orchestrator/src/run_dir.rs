@@ -7,6 +7,7 @@ use std::io::{Read, Write};
 
 use anyhow::Context;
 use swarmrt_scenario::Config;
+use swarmrt_scenario::safe_fs;
 
 use crate::error::{SwarmError, SwarmResult};
 
@@ -63,6 +64,45 @@ pub fn unused_dir(base: &str) -> anyhow::Result<PathBuf> {
 /// The lock file a run holds in its directory.
 pub const LOCK_FILE: &str = ".lock";
 
+/// The mark swarm leaves in every run directory it claims ([`claim`], a sweep's runs): only a
+/// directory holding it is one `--force` may clear.
+pub const MARK_FILE: &str = ".swarmrt-run";
+
+/// What [`MARK_FILE`] starts with; the version of swarm that wrote it follows.
+const MARK_TEXT: &str = "swarmrt run directory";
+
+/// Marks `dir` as a run directory swarm wrote ([`MARK_FILE`], never through a link planted
+/// at its name: that is refused). Call it holding the directory's lock.
+pub fn mark(dir: &Path) -> std::io::Result<()> {
+    safe_fs::write_nofollow(
+        &dir.join(MARK_FILE),
+        format!("{MARK_TEXT} (swarmrt {})\n", env!("CARGO_PKG_VERSION")),
+    )
+}
+
+/// [`mark`] for [`claim`]: a link at the mark's name is the user's to remove (a user error).
+fn mark_claimed(dir: &Path) -> SwarmResult<()> {
+    mark(dir).map_err(|e| {
+        if safe_fs::is_symlink_refusal(&e) {
+            SwarmError::User(format!("--out {}: {e}", dir.display()))
+        } else {
+            let path = dir.join(MARK_FILE);
+            SwarmError::Internal(
+                anyhow::Error::from(e).context(format!("cannot write {}", path.display())),
+            )
+        }
+    })
+}
+
+/// Whether `dir` holds swarm's [`MARK_FILE`] (a regular file starting with its text; a link
+/// at its name is no mark).
+pub fn is_marked(dir: &Path) -> bool {
+    let mut head = [0u8; MARK_TEXT.len()];
+    safe_fs::open_nofollow(&dir.join(MARK_FILE), std::fs::OpenOptions::new().read(true))
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok_and(|()| head == *MARK_TEXT.as_bytes())
+}
+
 /// A run's hold on its directory: an exclusive `flock` on `DIR/.lock`, taken before anything
 /// is written and released when this is dropped, or by the kernel when the process dies (a
 /// crashed orchestrator leaves no stale lock; the file stays, unlocked). The descriptor is
@@ -98,10 +138,13 @@ const IPC_CONFIG_DIR: &str = "config";
 /// is refused, whether or not the first has written anything yet.
 ///
 /// - locked by another run: refused, `--force` or not (a user error naming the directory);
-/// - holding anything but the lock file: refused unless `force`;
-/// - with `force`: the earlier run's files are removed first (the lock is kept). Only a run
-///   directory is cleared: one that holds a `config.toml` and no subdirectory but its own
-///   [`STORAGE_DIR`] and `config/`, so `--force --out ~` cannot wipe a home directory or a sweep.
+/// - holding anything but the lock file and swarm's [`MARK_FILE`]: refused unless `force`;
+/// - with `force`: the earlier run's files are removed first (the lock and the mark are
+///   kept). Only a run directory swarm wrote is cleared: one that holds its [`MARK_FILE`] and
+///   no subdirectory but its own [`STORAGE_DIR`] and `config/`, so `--force --out ~` cannot
+///   wipe a home directory, a sweep, or a directory that merely holds a `config.toml`.
+///
+/// A directory claimed is marked ([`mark`]) before this returns.
 pub fn claim(dir: &Path, force: bool) -> SwarmResult<DirLock> {
     let mut lock = lock(dir)?;
     let shown = dir.display();
@@ -109,12 +152,14 @@ pub fn claim(dir: &Path, force: bool) -> SwarmResult<DirLock> {
     for entry in std::fs::read_dir(dir).with_context(|| format!("cannot list {shown}"))? {
         let entry = entry.with_context(|| format!("cannot list {shown}"))?;
         let name = entry.file_name().to_string_lossy().into_owned();
-        if name != LOCK_FILE {
+        if name != LOCK_FILE && name != MARK_FILE {
+            // `file_type` does not follow a link: a link is removed, never what it points to.
             let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
             held.push((name, is_dir));
         }
     }
     if held.is_empty() {
+        mark_claimed(dir)?;
         lock.note_holder();
         return Ok(lock);
     }
@@ -132,14 +177,21 @@ pub fn claim(dir: &Path, force: bool) -> SwarmResult<DirLock> {
              or pass --force to remove them and run there"
         )));
     }
-    let run_like = held.iter().any(|(n, _)| n == "config.toml")
-        && held
-            .iter()
-            .all(|(n, d)| !*d || n == STORAGE_DIR || n == IPC_CONFIG_DIR);
-    if !run_like {
+    if !is_marked(dir) {
         return Err(SwarmError::User(format!(
-            "--out {shown}: --force replaces only a run directory (a config.toml and no \
-             subdirectories but its own storage/ and config/), and this holds {names}{more}; choose another directory"
+            "--out {shown}: --force replaces only a run directory swarm wrote, and swarm did \
+             not write this one (it has no {MARK_FILE} mark; it holds {names}{more}); nothing \
+             was removed; choose another directory"
+        )));
+    }
+    if let Some((sub, _)) = held
+        .iter()
+        .find(|(n, d)| *d && n != STORAGE_DIR && n != IPC_CONFIG_DIR)
+    {
+        return Err(SwarmError::User(format!(
+            "--out {shown}: --force replaces only a run directory (no subdirectories but its \
+             own storage/ and config/), and this holds {sub}/; nothing was removed; choose \
+             another directory"
         )));
     }
     for (name, is_dir) in &held {
@@ -156,12 +208,15 @@ pub fn claim(dir: &Path, force: bool) -> SwarmResult<DirLock> {
         "--force: removed the earlier run's {} files from {shown} ({names}{more})",
         held.len()
     );
+    mark_claimed(dir)?;
     lock.note_holder();
     Ok(lock)
 }
 
 /// Creates `dir` and takes its lock (see [`claim`]), without looking at what it holds; a
-/// user error naming the directory if another run holds it.
+/// user error naming the directory if another run holds it, or if its lock file is a
+/// symbolic link (refused, never followed: the file it points to is neither locked nor
+/// written).
 pub fn lock(dir: &Path) -> SwarmResult<DirLock> {
     let shown = dir.display();
     if dir.exists() && !dir.is_dir() {
@@ -169,13 +224,23 @@ pub fn lock(dir: &Path) -> SwarmResult<DirLock> {
     }
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {shown}"))?;
     let path = dir.join(LOCK_FILE);
-    let mut file = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .create(true)
-        .truncate(false)
-        .open(&path)
-        .with_context(|| format!("cannot open {}", path.display()))?;
+    let mut file = match safe_fs::open_rw_nofollow(&path) {
+        Ok(f) => f,
+        Err(e) if safe_fs::is_symlink_refusal(&e) => {
+            return Err(SwarmError::User(format!("--out {shown}: {e}")));
+        }
+        Err(e) => {
+            return Err(SwarmError::Internal(
+                anyhow::Error::from(e).context(format!("cannot open {}", path.display())),
+            ));
+        }
+    };
+    if !file.metadata().is_ok_and(|m| m.is_file()) {
+        return Err(SwarmError::User(format!(
+            "--out {shown}: {} is not a regular file; refusing to use it as the lock",
+            path.display()
+        )));
+    }
     // std's `try_lock` is `flock(LOCK_EX | LOCK_NB)` on Linux: the kernel drops it with the
     // last descriptor, so a crashed run leaves no stale lock.
     match file.try_lock() {
@@ -219,7 +284,7 @@ pub fn civil_from_days(z: i64) -> (i64, u32, u32) {
 pub fn prepare(dir: &Path, cfg: &Config) -> anyhow::Result<PathBuf> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let config_path = dir.join("config.toml");
-    std::fs::write(&config_path, cfg.to_toml())
+    safe_fs::write_nofollow(&config_path, cfg.to_toml())
         .with_context(|| format!("cannot write {}", config_path.display()))?;
     Ok(config_path)
 }
@@ -233,30 +298,27 @@ pub const METRICS_ROOM: &str = ".metrics-room";
 /// say that it failed. Best effort: without room even for this, the run goes on.
 pub fn reserve_metrics_room(dir: &Path, robots: u32) {
     let len = 8 * 1024 + 256 * robots as usize;
-    if let Err(e) = std::fs::write(dir.join(METRICS_ROOM), vec![0u8; len]) {
-        let _ = std::fs::remove_file(dir.join(METRICS_ROOM));
+    if let Err(e) = safe_fs::write_nofollow(&dir.join(METRICS_ROOM), vec![0u8; len]) {
+        if !safe_fs::is_symlink_refusal(&e) {
+            let _ = std::fs::remove_file(dir.join(METRICS_ROOM));
+        }
         tracing::warn!("cannot set aside room for metrics.json: {e}");
     }
 }
 
-/// Writes `metrics.json` atomically (temp file + rename): never a truncated file. Frees the
-/// room [`reserve_metrics_room`] set aside first. If the write fails (a full disk) the
-/// temporary file is removed rather than left half written.
+/// Writes `metrics.json` atomically (`metrics.json.tmp` + rename): never a truncated file.
+/// Frees the room [`reserve_metrics_room`] set aside first. If the write fails (a full disk)
+/// the temporary file is removed rather than left half written. A symbolic link at either
+/// name is refused, never followed.
 pub fn write_metrics(dir: &Path, metrics: &serde_json::Value) -> anyhow::Result<()> {
     let _ = std::fs::remove_file(dir.join(METRICS_ROOM));
-    let tmp = dir.join("metrics.json.tmp");
-    let written = std::fs::write(&tmp, serde_json::to_string_pretty(metrics)? + "\n")
-        .and_then(|()| std::fs::rename(&tmp, dir.join("metrics.json")));
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(
-            anyhow::Error::from(e).context(format!("cannot write {}/metrics.json", dir.display()))
-        );
-    }
-    Ok(())
+    let text = serde_json::to_string_pretty(metrics)? + "\n";
+    safe_fs::write_replace_nofollow(&dir.join("metrics.json"), text)
+        .with_context(|| format!("cannot write {}/metrics.json", dir.display()))
 }
 
-/// Draws `trajectory.svg` and `trajectory.png` from the recorded trajectory.
+/// Draws `trajectory.svg` and `trajectory.png` from the recorded trajectory (written without
+/// following a link planted at their names, see `swarmrt_analysis::plot::write_svg_png`).
 pub fn write_plots(dir: &Path, cfg: &Config) -> anyhow::Result<()> {
     let tracks = swarmrt_analysis::run_dir::read_tracks(dir)?;
     write_trajectory_plots(
@@ -349,10 +411,9 @@ pub fn trim_torn_records(dir: &Path, robots: usize) -> anyhow::Result<Option<u64
     Ok(last)
 }
 
+/// Cuts `path` to `len` bytes, refusing a symbolic link at its name.
 fn truncate(path: &Path, len: u64) -> anyhow::Result<()> {
-    std::fs::OpenOptions::new()
-        .write(true)
-        .open(path)
+    safe_fs::open_existing_nofollow(path)
         .and_then(|f| f.set_len(len))
         .with_context(|| format!("cannot trim {}", path.display()))
 }
@@ -390,16 +451,23 @@ mod tests {
                 "{e}"
             );
         }
+        assert!(is_marked(&dir), "a claimed directory is marked");
         std::fs::write(dir.join("config.toml"), "x").unwrap();
         drop(held);
         let e = claim(&dir, false).unwrap_err().to_string();
         assert!(e.contains("config.toml") && e.contains("--force"), "{e}");
         let _again = claim(&dir, true).unwrap();
+        let mut left: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
         assert_eq!(
-            std::fs::read_dir(&dir).unwrap().count(),
-            1,
-            "only .lock is left"
+            left,
+            [LOCK_FILE, MARK_FILE],
+            "only the lock and the mark are left"
         );
+        assert!(is_marked(&dir));
         // Not a run directory: --force does not clear it.
         let other = root.path().join("home");
         std::fs::create_dir_all(other.join("sub")).unwrap();
@@ -407,6 +475,178 @@ mod tests {
         let e = claim(&other, true).unwrap_err().to_string();
         assert!(e.contains("only a run directory"), "{e}");
         assert!(other.join("config.toml").exists() && other.join("sub").exists());
+    }
+
+    #[test]
+    fn force_clears_only_a_directory_swarm_marked() {
+        let root = tempfile::tempdir().unwrap();
+        // A config.toml swarm did not write (no mark): refused, nothing removed.
+        let foreign = root.path().join("foreign");
+        std::fs::create_dir(&foreign).unwrap();
+        std::fs::write(foreign.join("config.toml"), "mine").unwrap();
+        std::fs::write(foreign.join("notes.txt"), "mine too").unwrap();
+        let e = claim(&foreign, true).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            format!(
+                "--out {}: --force replaces only a run directory swarm wrote, and swarm did not \
+                 write this one (it has no .swarmrt-run mark; it holds config.toml, notes.txt); \
+                 nothing was removed; choose another directory",
+                foreign.display()
+            )
+        );
+        assert_eq!(std::fs::read(foreign.join("config.toml")).unwrap(), b"mine");
+        assert!(foreign.join("notes.txt").exists() && !foreign.join(MARK_FILE).exists());
+        // A mark that is a link, or holds other text, is no mark.
+        let victim = root.path().join("victim");
+        std::fs::write(&victim, format!("{MARK_TEXT} (forged)\n")).unwrap();
+        std::os::unix::fs::symlink(&victim, foreign.join(MARK_FILE)).unwrap();
+        assert!(!is_marked(&foreign));
+        assert!(claim(&foreign, true).is_err());
+        std::fs::remove_file(foreign.join(MARK_FILE)).unwrap();
+        std::fs::write(foreign.join(MARK_FILE), "something else\n").unwrap();
+        assert!(!is_marked(&foreign));
+        assert!(claim(&foreign, true).is_err());
+        assert!(foreign.join("config.toml").exists());
+
+        // Marked, but holding a subdirectory that is not its own: refused too.
+        let sub = root.path().join("sub");
+        drop(claim(&sub, false).unwrap());
+        std::fs::create_dir_all(sub.join("photos")).unwrap();
+        std::fs::create_dir_all(sub.join(STORAGE_DIR)).unwrap();
+        let e = claim(&sub, true).unwrap_err().to_string();
+        assert!(
+            e.contains("holds photos/") && e.contains("nothing was removed"),
+            "{e}"
+        );
+        assert!(sub.join("photos").is_dir() && sub.join(STORAGE_DIR).is_dir());
+
+        // Marked with its own storage/ and config/: cleared, a link inside removed as a link.
+        let run = root.path().join("run");
+        drop(claim(&run, false).unwrap());
+        std::fs::create_dir_all(run.join("storage")).unwrap();
+        std::fs::write(run.join("storage/raft-0.state"), "x").unwrap();
+        std::fs::write(run.join("config.toml"), "x").unwrap();
+        std::os::unix::fs::symlink(&victim, run.join("trajectory.csv")).unwrap();
+        drop(claim(&run, true).unwrap());
+        assert!(!run.join("storage").exists() && !run.join("config.toml").exists());
+        assert!(std::fs::symlink_metadata(run.join("trajectory.csv")).is_err());
+        assert!(
+            std::fs::read_to_string(&victim)
+                .unwrap()
+                .starts_with(MARK_TEXT)
+        );
+        // An empty directory holding only a mark and a lock is free without --force.
+        drop(claim(&run, false).unwrap());
+    }
+
+    /// A symbolic link planted at `name` in a fresh directory, pointing at a file outside
+    /// holding "keep"; returns (the directory, the file outside, the link).
+    fn planted(root: &Path, name: &str) -> (PathBuf, PathBuf, PathBuf) {
+        let dir = root.join(format!("run-{}", name.trim_start_matches('.')));
+        std::fs::create_dir_all(&dir).unwrap();
+        let victim = root.join(format!("victim-{}", name.trim_start_matches('.')));
+        std::fs::write(&victim, "keep").unwrap();
+        let link = dir.join(name);
+        std::os::unix::fs::symlink(&victim, &link).unwrap();
+        (dir, victim, link)
+    }
+
+    #[test]
+    fn links_planted_in_a_run_directory_are_refused_never_followed() {
+        let root = tempfile::tempdir().unwrap();
+        let refused = |link: &Path| {
+            format!(
+                "{} is a symbolic link; refusing to follow it",
+                link.display()
+            )
+        };
+
+        // The lock: refused as a user error, before anything is written; not locked either.
+        let (dir, victim, link) = planted(root.path(), LOCK_FILE);
+        for force in [false, true] {
+            let e = claim(&dir, force).unwrap_err();
+            assert!(matches!(e, SwarmError::User(_)), "{e}");
+            assert_eq!(
+                e.to_string(),
+                format!("--out {}: {}", dir.display(), refused(&link))
+            );
+        }
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep");
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            1,
+            "nothing written"
+        );
+        let f = std::fs::File::open(&victim).unwrap();
+        assert!(f.try_lock().is_ok(), "the file outside was never locked");
+
+        // The mark.
+        let (dir, victim, link) = planted(root.path(), MARK_FILE);
+        let e = claim(&dir, false).unwrap_err();
+        assert!(matches!(e, SwarmError::User(_)), "{e}");
+        assert!(e.to_string().ends_with(&refused(&link)), "{e}");
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep");
+
+        let cfg = Config::from_toml_str(
+            "links.toml",
+            "[scenario]\nname = \"links\"\nticks = 3\n[map]\nbounds = [0.0, 0.0, 10.0, 10.0]\n\
+             goal = { x = 3.5, y = 3.0, radius = 1.0 }\n[robots]\ncount = 2\n",
+            &[],
+        )
+        .unwrap();
+        // config.toml.
+        let (dir, victim, link) = planted(root.path(), "config.toml");
+        let e = format!("{:#}", prepare(&dir, &cfg).unwrap_err());
+        assert!(e.ends_with(&refused(&link)), "{e}");
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep");
+
+        // metrics.json, its temporary file and the room set aside for it.
+        for name in ["metrics.json", "metrics.json.tmp", METRICS_ROOM] {
+            let (dir, victim, link) = planted(root.path(), name);
+            reserve_metrics_room(&dir, 2);
+            if name == METRICS_ROOM {
+                assert!(std::fs::symlink_metadata(&link).unwrap().is_symlink());
+            } else {
+                let e = format!(
+                    "{:#}",
+                    write_metrics(&dir, &serde_json::json!({"a": 1})).unwrap_err()
+                );
+                assert!(e.ends_with(&refused(&link)), "{e}");
+            }
+            assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep", "{name}");
+        }
+
+        // Trimming torn records.
+        let (dir, victim, link) = planted(root.path(), "events.jsonl");
+        std::fs::write(
+            dir.join("trajectory.csv"),
+            "tick,id,x,y,theta,v,omega,lidar,state\n0,0,1,1,0,0,0,1,active\n",
+        )
+        .unwrap();
+        let e = format!("{:#}", trim_torn_records(&dir, 1).unwrap_err());
+        assert!(e.ends_with(&refused(&link)), "{e}");
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep");
+
+        // The plots.
+        for name in ["trajectory.svg", "trajectory.png"] {
+            let (dir, victim, link) = planted(root.path(), name);
+            std::fs::write(
+                dir.join("trajectory.csv"),
+                "tick,id,x,y,theta,v,omega,lidar,state\n0,0,1,1,0,0,0,1,active\n\
+                 0,1,2,2,0,0,0,1,active\n",
+            )
+            .unwrap();
+            let e = format!("{:#}", write_plots(&dir, &cfg).unwrap_err());
+            assert!(e.ends_with(&refused(&link)), "{e}");
+            assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep", "{name}");
+            let left: Vec<_> = std::fs::read_dir(&dir)
+                .unwrap()
+                .map(|e| e.unwrap().file_name())
+                .filter(|n| n.to_string_lossy().ends_with(".tmp"))
+                .collect();
+            assert!(left.is_empty(), "no temporary left: {left:?}");
+        }
     }
 
     #[test]

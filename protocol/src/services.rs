@@ -5,15 +5,40 @@
 
 use std::path::PathBuf;
 
-/// The directory under which every run keeps its iceoryx2 files (one sub-directory per run).
+/// The directory under which this user's runs keep their iceoryx2 files (one sub-directory
+/// per run): `/dev/shm/swarmrt-<euid>`, or the value of [`SHM_BASE_ENV`] when it is set.
 ///
-/// On tmpfs, beside the shared memory: iceoryx2 creates and removes a handful of files per
-/// node and port, and on the ext4 `/tmp` of the benchmark machine inode allocation among
-/// recently deleted inodes made each robot's node take 50-700 ms to create under load; 500
-/// robots took 7.6 s to start there and 0.8 s here (docs/benchmarks.md).
-pub const IPC_BASE_DIR: &str = "/dev/shm/swarmrt-iceoryx2";
-/// Where builds before the move to tmpfs kept run roots; `swarm clean` still looks there.
-pub const LEGACY_IPC_BASE_DIR: &str = "/tmp/iceoryx2/swarmrt";
+/// Private to its user (mode 0700, checked by `swarmrt_ipc::cleanup::claim` before every
+/// run), so no other user can list, read or replace a run's files. On tmpfs, beside the
+/// shared memory: iceoryx2 creates and removes a handful of files per node and port, and on
+/// the ext4 `/tmp` of the benchmark machine inode allocation among recently deleted inodes
+/// made each robot's node take 50-700 ms to create under load; 500 robots took 7.6 s to
+/// start there and 0.8 s here (docs/benchmarks.md).
+pub fn ipc_base_dir() -> PathBuf {
+    match std::env::var_os(SHM_BASE_ENV) {
+        Some(base) if !base.is_empty() => PathBuf::from(base),
+        _ => PathBuf::from(format!("{SHM_DIR}/swarmrt-{}", euid())),
+    }
+}
+
+/// Environment variable that, when set, replaces [`ipc_base_dir`]'s `/dev/shm/swarmrt-<euid>`
+/// (an absolute path of at most 27 bytes, so iceoryx2's socket paths under it fit, best on a
+/// tmpfs): for tests, and for users who want another tmpfs. It is checked as the default
+/// base is. The processes of a run inherit it; robots get their run's root itself
+/// (`SWARMRT_IPC_ROOT`, `SWARMRT_IPC_CONFIG`). `swarm clean` sweeps the base of its own
+/// environment: run it with the same value.
+pub const SHM_BASE_ENV: &str = "SWARMRT_SHM_BASE";
+
+/// The effective user id of this process.
+pub fn euid() -> u32 {
+    // SAFETY: geteuid has no preconditions and cannot fail.
+    unsafe { libc::geteuid() }
+}
+
+/// Where earlier builds kept run roots; `swarm clean` still sweeps them (only the entries
+/// this user owns): the base every user shared in `/dev/shm` before each user had their own,
+/// and the one in `/tmp` before the move to tmpfs.
+pub const LEGACY_IPC_BASE_DIRS: [&str; 2] = ["/dev/shm/swarmrt-iceoryx2", "/tmp/iceoryx2/swarmrt"];
 /// Directory where POSIX shared memory segments appear on Linux.
 pub const SHM_DIR: &str = "/dev/shm";
 /// Event id a robot uses on the command event after publishing a command.
@@ -131,7 +156,7 @@ impl RunServices {
 
 /// The iceoryx2 root directory of `run_id`.
 pub fn ipc_root_of(run_id: &str) -> PathBuf {
-    PathBuf::from(IPC_BASE_DIR).join(run_id)
+    ipc_base_dir().join(run_id)
 }
 
 /// The shared-memory prefix of `run_id`.
@@ -162,5 +187,14 @@ mod tests {
         assert!(valid_run_id("00ab"));
         assert!(!valid_run_id("../x"));
         assert!(!valid_run_id(""));
+    }
+
+    #[test]
+    fn the_base_is_per_user() {
+        if std::env::var_os(SHM_BASE_ENV).is_none() {
+            let base = ipc_base_dir();
+            assert_eq!(base, PathBuf::from(format!("/dev/shm/swarmrt-{}", euid())));
+            assert_eq!(ipc_root_of("00ab"), base.join("00ab"));
+        }
     }
 }

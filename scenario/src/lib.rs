@@ -36,6 +36,7 @@ pub mod process;
 pub mod program;
 pub mod reference;
 pub mod rng;
+pub mod safe_fs;
 pub mod validate;
 
 pub use angle::wrap_angle;

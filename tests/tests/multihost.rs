@@ -17,9 +17,24 @@ fn lab() -> Lab {
     })
 }
 
-/// A hosts file: the world on host 0, `counts[i]` robots on host i + 1.
+/// A hosts file: the world on host 0, `counts[i]` robots on host i + 1, over the default
+/// mutually authenticated `quic/` link with certificates from `swarm certs` in `dir/certs`.
 fn hosts_file(lab: &Lab, dir: &Path, counts: &[u32], extra: &str) -> std::path::PathBuf {
-    let mut text = format!("[world]\nlisten = \"tcp/{}:7447\"\n", lab.addr(0));
+    let path = hosts_file_with(lab, dir, counts, extra, "quic");
+    let certs = swarmrt_tests::swarm(&["certs", path.to_str().unwrap()], LIMIT);
+    assert_ok(&certs);
+    path
+}
+
+/// [`hosts_file`] with endpoints of `scheme` and no certificates.
+fn hosts_file_with(
+    lab: &Lab,
+    dir: &Path,
+    counts: &[u32],
+    extra: &str,
+    scheme: &str,
+) -> std::path::PathBuf {
+    let mut text = format!("[world]\nlisten = \"{scheme}/{}:7447\"\n", lab.addr(0));
     for (i, c) in counts.iter().enumerate() {
         let launcher: Vec<String> = lab
             .launcher(i + 1)
@@ -80,7 +95,9 @@ fn assert_hosts_clean(lab: &Lab) {
         // The base directory of run roots may stay; no run root or segment may.
         let roots = lab_roots(lab, i);
         assert!(
-            shm.iter().all(|e| e == "swarmrt-iceoryx2") && roots.is_empty(),
+            shm.iter()
+                .all(|e| swarmrt_protocol::services::ipc_base_dir().ends_with(e))
+                && roots.is_empty(),
             "host {i} keeps {shm:?} {roots:?}"
         );
     }
@@ -90,7 +107,8 @@ fn lab_roots(lab: &Lab, i: usize) -> Vec<String> {
     let l = lab.launcher(i);
     let out = Command::new(&l[0])
         .args(&l[1..])
-        .args(["ls", "-A", "/dev/shm/swarmrt-iceoryx2"])
+        .args(["ls", "-A"])
+        .arg(swarmrt_protocol::services::ipc_base_dir())
         .output()
         .unwrap();
     String::from_utf8_lossy(&out.stdout)
@@ -303,7 +321,7 @@ fn bad_or_unreachable_hosts_fail_fast_with_their_name() {
         &lab,
         tmp.path(),
         &[2, 2],
-        &format!("connect = \"tcp/{}:7999\"\n", lab.addr(0)),
+        &format!("connect = \"quic/{}:7999\"\n", lab.addr(0)),
     );
     // Runs flocking with `hosts`; returns the error output of a run that must fail with
     // exit 2 and leave nothing on any host.
@@ -349,4 +367,115 @@ fn bad_or_unreachable_hosts_fail_fast_with_their_name() {
             && err.contains("/nonexistent/ssh"),
         "{err}"
     );
+}
+
+/// The link's trust, end to end (docs/security.md): plain `tcp/` is refused unless asked
+/// for; a stranger on a fourth host, posing as host h1 with a certificate of another CA or
+/// with none, never gets in while a secure run goes on; and the secure run writes the bytes
+/// of the insecure one.
+#[test]
+fn an_insecure_link_must_be_asked_for_and_a_stranger_never_gets_in() {
+    let lab = Lab::new(4).unwrap_or_else(|e| panic!("cannot build the emulated hosts: {e}"));
+    let tmp = tempfile::tempdir().unwrap();
+    let (tcp_dir, quic_dir, evil_dir) = (
+        tmp.path().join("tcp"),
+        tmp.path().join("quic"),
+        tmp.path().join("evil"),
+    );
+    for d in [&tcp_dir, &quic_dir, &evil_dir] {
+        std::fs::create_dir(d).unwrap();
+    }
+    let counts = [2, 2];
+    let tcp = hosts_file_with(&lab, &tcp_dir, &counts, "", "tcp");
+    let run = |hosts: &Path, out: &str, extra: &[&str]| {
+        let out = tmp.path().join(out);
+        let mut args = vec![
+            "run",
+            "configs/flocking_crossing.toml",
+            "--ticks",
+            "200",
+            "--hosts",
+            hosts.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        (run_on_host0(&lab, &args), out)
+    };
+    let (o, _) = run(&tcp, "refused", &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("plain TCP") && err.contains("--insecure-link") && err.contains("swarm certs"),
+        "{err}"
+    );
+    assert_hosts_clean(&lab);
+    let (o, insecure) = run(&tcp, "insecure", &["--insecure-link"]);
+    assert_ok(&o);
+    assert_eq!(metrics(&insecure)["link"], "tcp (insecure)");
+
+    // The stranger's certificates: a CA of its own, naming h1.
+    let quic = hosts_file(&lab, &quic_dir, &counts, "");
+    // Its hosts file and certificates, from a CA of its own.
+    hosts_file(&lab, &evil_dir, &counts, "");
+    let toml = std::fs::read_to_string(workspace().join("configs/flocking_crossing.toml")).unwrap();
+    let config = swarmrt_protocol::control::HostControl::Config { toml }.to_line();
+    let stranger = |certs: Option<&Path>| {
+        let l = lab.launcher(3);
+        let mut c = Command::new(&l[0]);
+        c.args(&l[1..])
+            .arg(swarmrt_tests::bin_dir().join("swarm-host"))
+            .args(["--run-id", "5712a9", "--host", "h1", "--first", "7"])
+            .args(["--count", "2", "--connect"])
+            .arg(format!("quic/{}:7447", lab.addr(0)));
+        if let Some(d) = certs {
+            c.arg("--certs").arg(d);
+        }
+        let mut child = c
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        use std::io::Write;
+        child
+            .stdin
+            .as_mut()
+            .unwrap()
+            .write_all(config.as_bytes())
+            .unwrap();
+        child
+    };
+    let with_evil_ca = stranger(Some(&evil_dir.join("certs")));
+    let (o, secure) = run(&quic, "secure", &[]);
+    assert_ok(&o);
+    let out = swarmrt_tests::wait_with_watchdog(with_evil_ca, LIMIT);
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        !out.status.success() && said.contains("cannot reach the world"),
+        "the stranger with another CA's certificate got in: {said}"
+    );
+    let without = swarmrt_tests::wait_with_watchdog(stranger(None), LIMIT);
+    let said = String::from_utf8_lossy(&without.stdout);
+    assert!(
+        !without.status.success() && said.contains("needs --certs"),
+        "{said}"
+    );
+    let m = metrics(&secure);
+    assert_eq!(m["link"], "mutual tls", "{m}");
+    for host in ["h1", "h2"] {
+        assert_eq!(
+            m["shell"]["link"].as_array().map(|a| a.len()),
+            Some(2),
+            "{m}"
+        );
+        assert_eq!(m["hosts"][host]["malformed"], 0, "{host}: {m}");
+    }
+    for f in ["trajectory.csv", "events.jsonl"] {
+        assert!(
+            bytes(&insecure, f) == bytes(&secure, f),
+            "{f} differs between the insecure and the secure link"
+        );
+    }
+    assert_hosts_clean(&lab);
 }

@@ -13,6 +13,7 @@ use std::path::Path;
 
 use swarmrt_protocol::records::RadioRow;
 use swarmrt_scenario::Config;
+use swarmrt_scenario::safe_fs::create_nofollow;
 
 use crate::world::{Event, Robot};
 
@@ -93,11 +94,12 @@ pub struct Recorder {
 
 impl Recorder {
     /// Creates both files (truncating) in `dir` and writes the CSV header (with the aerial
-    /// columns when `aerial`).
+    /// columns when `aerial`). A symbolic link planted at a record's name is refused, never
+    /// followed ([`swarmrt_scenario::safe_fs`]).
     pub fn create(dir: &Path, aerial: bool) -> std::io::Result<Recorder> {
-        let mut trajectory = File::create(dir.join("trajectory.csv"))?;
+        let mut trajectory = create_nofollow(&dir.join("trajectory.csv"))?;
         trajectory.write_all(trajectory_header(aerial).as_bytes())?;
-        let events = File::create(dir.join("events.jsonl"))?;
+        let events = create_nofollow(&dir.join("events.jsonl"))?;
         Ok(Recorder {
             trajectory,
             events,
@@ -112,7 +114,7 @@ impl Recorder {
     pub fn for_run(dir: &Path, cfg: &Config) -> std::io::Result<Recorder> {
         let mut recorder = Recorder::create(dir, cfg.robots.aerial.is_some())?;
         if cfg.scenario.record_radio {
-            let mut radio = File::create(dir.join("radio.csv"))?;
+            let mut radio = create_nofollow(&dir.join("radio.csv"))?;
             radio.write_all(RADIO_HEADER.as_bytes())?;
             recorder.radio = Some(radio);
         }
@@ -274,5 +276,58 @@ impl Drop for RecordWriter {
     fn drop(&mut self) {
         // A run ending in an error still leaves every tick it handed over on disk.
         let _ = self.join();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A record name that is a symbolic link to a file outside the run directory is refused,
+    /// naming it; the file it points to keeps its bytes.
+    #[test]
+    fn a_planted_link_at_a_records_name_is_refused_not_followed() {
+        let cfg = Config::from_toml_str(
+            "links.toml",
+            r#"
+                [scenario]
+                name = "links"
+                ticks = 3
+                record_radio = true
+                [map]
+                bounds = [0.0, 0.0, 10.0, 10.0]
+                goal = { x = 3.5, y = 3.0, radius = 1.0 }
+                [robots]
+                count = 2
+            "#,
+            &[],
+        )
+        .unwrap();
+        for name in ["trajectory.csv", "events.jsonl", "radio.csv"] {
+            let root = tempfile::tempdir().unwrap();
+            let victim = root.path().join("victim");
+            std::fs::write(&victim, "keep").unwrap();
+            let dir = root.path().join("run");
+            std::fs::create_dir(&dir).unwrap();
+            let link = dir.join(name);
+            std::os::unix::fs::symlink(&victim, &link).unwrap();
+            let e = Recorder::for_run(&dir, &cfg).err().expect("refused");
+            assert_eq!(
+                e.to_string(),
+                format!(
+                    "{} is a symbolic link; refusing to follow it",
+                    link.display()
+                )
+            );
+            assert!(RecordWriter::for_run(&dir, &cfg).is_err());
+            assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep", "{name}");
+        }
+        // Without links: the usual files and headers.
+        let root = tempfile::tempdir().unwrap();
+        drop(Recorder::for_run(root.path(), &cfg).unwrap());
+        assert_eq!(
+            std::fs::read_to_string(root.path().join("radio.csv")).unwrap(),
+            RADIO_HEADER
+        );
     }
 }

@@ -19,6 +19,7 @@ use std::sync::OnceLock;
 use anyhow::{Context, anyhow};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use swarmrt_scenario::safe_fs;
 
 /// The embedded font, registered with plotters as "sans-serif".
 static FONT_BYTES: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
@@ -64,7 +65,10 @@ pub trait Drawing {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()>;
 }
 
-/// Writes `fig` as an SVG and a PNG of the same size.
+/// Writes `fig` as an SVG and a PNG of the same size. A symbolic link planted at either name
+/// is refused, never followed (`swarmrt_scenario::safe_fs`): plotters writes a PNG by its
+/// path, following links, so it writes into a directory made for this call alone (0700), and
+/// the PNG is renamed into place from there.
 pub fn write_svg_png(fig: &impl Drawing, svg_path: &Path, png_path: &Path) -> anyhow::Result<()> {
     ensure_font()?;
     let size = fig.size();
@@ -74,12 +78,26 @@ pub fn write_svg_png(fig: &impl Drawing, svg_path: &Path, png_path: &Path) -> an
         fig.draw(&root)?;
         root.present().map_err(draw_err("svg"))?;
     }
-    std::fs::write(svg_path, svg).with_context(|| format!("writing {}", svg_path.display()))?;
-    // Create the file first so an unwritable path gets a clear I/O error.
-    std::fs::File::create(png_path).with_context(|| format!("writing {}", png_path.display()))?;
-    let root = BitMapBackend::new(png_path, size).into_drawing_area();
-    fig.draw(&root)?;
-    root.present()
-        .map_err(|e| anyhow!("writing {}: {e}", png_path.display()))?;
+    safe_fs::write_nofollow(svg_path, svg)
+        .with_context(|| format!("writing {}", svg_path.display()))?;
+    // Refused before drawing, so a planted link costs no rendering; the rename below
+    // refuses it again (and would replace a link, never write through it).
+    safe_fs::refuse_symlink(png_path).with_context(|| format!("writing {}", png_path.display()))?;
+    let parent = png_path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    // An unwritable directory gets a clear I/O error here.
+    let private = safe_fs::PrivateDir::new(parent, "png")
+        .with_context(|| format!("writing {}", png_path.display()))?;
+    let drawn = private.path().join("plot.png");
+    {
+        let root = BitMapBackend::new(&drawn, size).into_drawing_area();
+        fig.draw(&root)?;
+        root.present()
+            .map_err(|e| anyhow!("writing {}: {e}", png_path.display()))?;
+    }
+    safe_fs::rename_nofollow(&drawn, png_path)
+        .with_context(|| format!("writing {}", png_path.display()))?;
     Ok(())
 }

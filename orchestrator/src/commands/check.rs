@@ -2,7 +2,7 @@
 
 use crate::cli::CheckArgs;
 use crate::config::load_config;
-use crate::error::SwarmResult;
+use crate::error::{SwarmError, SwarmResult};
 
 /// Prints the resolved config as TOML.
 pub fn check(args: &CheckArgs) -> SwarmResult<()> {
@@ -22,6 +22,24 @@ pub fn check(args: &CheckArgs) -> SwarmResult<()> {
                 "# host {}: robots {}..{} via {:?}, connecting to {}",
                 h.name, h.robots.start, h.robots.end, h.launcher, h.connect
             );
+        }
+        if !file.is_secure() {
+            eprintln!("warning: {}", file.insecure_refusal(path));
+        }
+        let problems = swarmrt_hosts::certs::check(&file);
+        if !problems.is_empty() {
+            for p in &problems {
+                eprintln!("error: {p}");
+            }
+            return Err(SwarmError::User(format!(
+                "{}: {} problem(s) with the run's certificates (swarm certs {} makes them)",
+                path.display(),
+                problems.len(),
+                path.display()
+            )));
+        }
+        if file.is_secure() {
+            println!("# certificates in {}: valid", file.certs.display());
         }
     }
     Ok(())

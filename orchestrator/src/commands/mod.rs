@@ -1,6 +1,7 @@
 //! One file per subcommand.
 
 pub mod bench;
+pub mod certs;
 pub mod check;
 pub mod clean;
 pub mod export;

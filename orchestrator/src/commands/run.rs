@@ -82,7 +82,13 @@ fn run_with(
         }
     };
     let hosts = match &args.hosts {
-        Some(path) => Some(swarmrt_hosts::HostsFile::load(path, cfg.robots.count)?),
+        Some(path) => {
+            let file = swarmrt_hosts::HostsFile::load(path, cfg.robots.count)?;
+            if !file.is_secure() && !args.insecure_link {
+                return Err(SwarmError::User(file.insecure_refusal(path)));
+            }
+            Some(file)
+        }
         None => None,
     };
     let config_path = run_dir::prepare(&dir, &cfg)?;
@@ -90,9 +96,12 @@ fn run_with(
         (Some(file), Some(path)) => {
             // The world reads it from the run directory, which also keeps it with the records.
             let copy = dir.join("hosts.toml");
-            std::fs::copy(path, &copy).map_err(|e| {
-                SwarmError::Internal(anyhow::anyhow!("cannot copy {}: {e}", path.display()))
-            })?;
+            // Never through a link planted at the copy's name.
+            std::fs::read(path)
+                .and_then(|text| swarmrt_scenario::safe_fs::write_nofollow(&copy, text))
+                .map_err(|e| {
+                    SwarmError::Internal(anyhow::anyhow!("cannot copy {}: {e}", path.display()))
+                })?;
             Some(crate::hosts::RunHosts { file, path: copy })
         }
         _ => None,
@@ -145,6 +154,7 @@ fn run_with(
     } else {
         let opts = processes::RunOptions {
             hosts: hosts.as_ref(),
+            insecure_link: args.insecure_link,
             realtime: args.realtime,
         };
         let out = match processes::run_on_hosts(&cfg, &config_path, &dir, &opts, interrupt, |t| {
@@ -171,6 +181,12 @@ fn run_with(
         metrics["processes"] = json!(out.processes);
         if let Some(h) = &out.hosts {
             metrics["hosts"] = h.clone();
+            // What the link between hosts trusted (docs/security.md).
+            metrics["link"] = serde_json::json!(if args.insecure_link {
+                "tcp (insecure)"
+            } else {
+                "mutual tls"
+            });
         }
         metrics["unscheduled_deaths"] = json!(
             out.unscheduled_deaths

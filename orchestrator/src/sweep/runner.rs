@@ -260,7 +260,9 @@ fn prepare(dir: &Path, config: &Path, toml: &str) -> anyhow::Result<()> {
             std::fs::remove_file(entry.path())?;
         }
     }
-    std::fs::write(config, toml)?;
+    // Marked as swarm's, so the child's `--force` may clear it.
+    run_dir::mark(dir)?;
+    swarmrt_scenario::safe_fs::write_nofollow(config, toml)?;
     Ok(())
 }
 

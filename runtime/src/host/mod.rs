@@ -58,9 +58,13 @@ struct Args {
     /// How many robots this host runs.
     #[arg(long, default_value_t = 0)]
     count: u32,
-    /// The world's Zenoh endpoint.
+    /// The world's Zenoh endpoint (`quic/...`, or `tcp/...` for an insecure link).
     #[arg(long, default_value = "")]
     connect: String,
+    /// The directory holding the CA (`ca.pem`) and this host's `host-<name>.pem` and
+    /// `.key` (what `swarm certs` wrote); needed for a `quic/` endpoint.
+    #[arg(long)]
+    certs: Option<PathBuf>,
     /// Only remove this run's iceoryx2 resources on this host, then exit.
     #[arg(long)]
     clean: bool,
@@ -192,8 +196,41 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
     let rx = ipc::wake_relay(&run, format!("swarmrt-{}-host-relay", args.run_id), raw_rx)?;
     spawn_stdin_reader(raw_tx.clone());
 
-    let session = link::host_session(&args.connect, count)
-        .map_err(|e| format!("cannot reach the world at {}: {e}", args.connect))?;
+    let (ca, (cert, key)) = match &args.certs {
+        Some(dir) => (
+            swarmrt_hosts::certs::ca_cert(dir),
+            swarmrt_hosts::certs::host_pair(dir, &args.host),
+        ),
+        None => Default::default(),
+    };
+    let tls = if args.connect.starts_with("quic/") {
+        if args.certs.is_none() {
+            return Err("a quic/ endpoint needs --certs (the directory swarm certs wrote)".into());
+        }
+        for p in [&ca, &cert, &key] {
+            if !p.is_file() {
+                return Err(format!(
+                    "{} is missing on this host (swarm certs writes it; copy it here)",
+                    p.display()
+                )
+                .into());
+            }
+        }
+        link::Tls::Mutual {
+            ca: &ca,
+            cert: &cert,
+            key: &key,
+        }
+    } else {
+        link::Tls::Insecure
+    };
+    let session = link::host_session(&args.connect, count, tls).map_err(|e| {
+        format!(
+            "cannot reach the world at {}: {e} (with quic/: is {} signed by the run's CA, and does the world's certificate name this address?)",
+            args.connect,
+            cert.display()
+        )
+    })?;
     let tx = raw_tx.clone();
     let _down = session
         .declare_subscriber(link::down_key(&args.run_id, &args.host))

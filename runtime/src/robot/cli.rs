@@ -2,6 +2,7 @@
 
 use super::shell;
 use clap::Parser;
+use swarmrt_agent::consensus::storage::StoreError;
 
 /// One robot of a swarmrt run.
 #[derive(Parser, Debug)]
@@ -70,6 +71,11 @@ pub fn main() -> std::process::ExitCode {
         Ok(shell::Exit::Shutdown) => std::process::ExitCode::SUCCESS,
         Ok(shell::Exit::Terminated) => std::process::ExitCode::from(143),
         Err(e) => {
+            // Corrupt stable storage: one plain line saying where and what to do, exit 2.
+            if let Some(StoreError::Corrupt(c)) = e.downcast_ref::<StoreError>() {
+                eprintln!("{c}");
+                return std::process::ExitCode::from(2);
+            }
             tracing::error!("robot failed: {e}");
             std::process::ExitCode::from(1)
         }

@@ -39,9 +39,8 @@ pub fn run(
     storage: Option<&std::path::Path>,
     slot_offset: u32,
 ) -> Result<Exit, IpcError> {
-    let node = ipc::node(run, &run.robot_node_name(id))?;
-    let ports = ipc::RobotPorts::open(&node, run)?;
-
+    // Stable storage first: a robot whose storage is corrupt refuses to start
+    // (`StoreError::Corrupt`) before it joins the run's services.
     let (mut store, restored) = match storage {
         Some(dir) if swarmrt_agent::consensus::stores_state(cfg) => {
             if incarnation == 0 {
@@ -53,6 +52,8 @@ pub fn run(
         }
         _ => (None, None),
     };
+    let node = ipc::node(run, &run.robot_node_name(id))?;
+    let ports = ipc::RobotPorts::open(&node, run)?;
     if let Some(s) = &restored {
         tracing::info!(
             term = s.term,

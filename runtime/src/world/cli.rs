@@ -24,6 +24,13 @@ struct Args {
     /// arrived; a robot that missed the tick keeps its last command.
     #[arg(long, conflicts_with = "hosts")]
     realtime: bool,
+    /// The run's certificates (the hosts file's `world.certs`, resolved by `swarm run`; the
+    /// copy of the hosts file in the run directory is not where they are).
+    #[arg(long, requires = "hosts")]
+    certs: Option<std::path::PathBuf>,
+    /// Accept the hosts file's plain `tcp/` endpoints (`swarm run --insecure-link`).
+    #[arg(long, requires = "hosts")]
+    insecure_link: bool,
 }
 
 /// Entry point of the process (the `swarm-world` binary in the orchestrator package).
@@ -48,7 +55,16 @@ pub fn main(vocabulary: swarmrt_protocol::Vocabulary) -> std::process::ExitCode 
             let file = swarmrt_hosts::HostsFile::load(path, cfg.robots.count);
             let text = std::fs::read_to_string(&args.config);
             match (file, text) {
-                (Ok(f), Ok(t)) => Some((f, swarmrt_hosts::link::layout(&t))),
+                (Ok(mut f), Ok(t)) => {
+                    if let Some(dir) = &args.certs {
+                        f.certs = dir.clone();
+                    }
+                    if !f.is_secure() && !args.insecure_link {
+                        tracing::error!("{}", f.insecure_refusal(path));
+                        return std::process::ExitCode::from(2);
+                    }
+                    Some((f, swarmrt_hosts::link::layout(&t)))
+                }
                 (Err(e), _) => {
                     tracing::error!("{e}");
                     return std::process::ExitCode::from(2);
