@@ -153,6 +153,20 @@ fn read_cert(path: &Path) -> Result<Vec<u8>, String> {
     Ok(pem.contents)
 }
 
+/// The common name a certificate file names (a host checks its own before connecting: the
+/// world's access control would drop everything a host with another's certificate says).
+pub fn common_name(path: &Path) -> Result<String, String> {
+    let der = read_cert(path)?;
+    let (_, c) = X509Certificate::from_der(&der)
+        .map_err(|_| format!("{}: not a valid X.509 certificate", path.display()))?;
+    Ok(c.subject()
+        .iter_common_name()
+        .next()
+        .and_then(|n| n.as_str().ok())
+        .unwrap_or("")
+        .to_string())
+}
+
 /// Checks one certificate against the CA: readable, signed by it, valid now, with a common
 /// name `cn`, carrying every name in `names`, with `key` its private key.
 fn check_pair(

@@ -455,6 +455,25 @@ fn an_insecure_link_must_be_asked_for_and_a_stranger_never_gets_in() {
         !out.status.success() && said.contains("cannot reach the world"),
         "the stranger with another CA's certificate got in: {said}"
     );
+    // A certificate of the run's CA, but h2's, offered as h1's: refused by the host itself
+    // in one line (the world's access control would drop all it says).
+    let stolen = tmp.path().join("stolen");
+    std::fs::create_dir(&stolen).unwrap();
+    let quic_certs = quic_dir.join("certs");
+    std::fs::copy(quic_certs.join("ca.pem"), stolen.join("ca.pem")).unwrap();
+    for ext in ["pem", "key"] {
+        std::fs::copy(
+            quic_certs.join(format!("host-h2.{ext}")),
+            stolen.join(format!("host-h1.{ext}")),
+        )
+        .unwrap();
+    }
+    let posing = swarmrt_tests::wait_with_watchdog(stranger(Some(&stolen)), LIMIT);
+    let said = String::from_utf8_lossy(&posing.stdout);
+    assert!(
+        !posing.status.success() && said.contains(r#"names host \"h2\", not \"h1\""#),
+        "{said}"
+    );
     let without = swarmrt_tests::wait_with_watchdog(stranger(None), LIMIT);
     let said = String::from_utf8_lossy(&without.stdout);
     assert!(

@@ -216,6 +216,15 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
                 .into());
             }
         }
+        let named = swarmrt_hosts::certs::common_name(&cert)?;
+        if named != args.host {
+            return Err(format!(
+                "{} names host {named:?}, not {:?}: the world would refuse everything it says; use this host's own certificate",
+                cert.display(),
+                args.host
+            )
+            .into());
+        }
         link::Tls::Mutual {
             ca: &ca,
             cert: &cert,
