@@ -276,6 +276,8 @@ fn a_hung_python_robot_is_given_up_killed_and_cleaned_up() {
     let dir = tmp.path().join("run");
     // Robot 3 thinks for a minute on its first tick: a hang.
     let hang = some_robots("3", &program("misbehave.py", &["slow:60000"]));
+    // The clock starts after the binaries are built (a `-p` test run rebuilds them).
+    swarmrt_tests::bin_dir();
     let started = std::time::Instant::now();
     let m = run_config(
         "configs/goto_simple.toml",
