@@ -240,9 +240,8 @@ impl SweepCsv {
             for r in &t.rows {
                 text.push_str(&format_line(r));
             }
-            let tmp = path.with_extension("csv.tmp");
-            std::fs::write(&tmp, text).with_context(|| format!("writing {}", tmp.display()))?;
-            std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))?;
+            swarmrt_scenario::safe_fs::write_replace_nofollow(path, text)
+                .with_context(|| format!("writing {}", path.display()))?;
             csv.header = Some(t.header.clone());
             csv.file = Some(Self::append_to(path)?);
         }
@@ -250,10 +249,7 @@ impl SweepCsv {
     }
 
     fn append_to(path: &Path) -> anyhow::Result<std::fs::File> {
-        std::fs::OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(path)
+        swarmrt_scenario::safe_fs::open_append_nofollow(path)
             .with_context(|| format!("opening {}", path.display()))
     }
 
@@ -282,7 +278,7 @@ impl SweepCsv {
     /// Writes the header implied by `row` to a new file, then any waiting rows.
     fn start(&mut self, row: &Row) -> anyhow::Result<()> {
         let header = header_for(&self.keys, row);
-        let mut file = std::fs::File::create(&self.path)
+        let mut file = swarmrt_scenario::safe_fs::create_nofollow(&self.path)
             .with_context(|| format!("creating {}", self.path.display()))?;
         file.write_all(format_line(&header).as_bytes())
             .with_context(|| format!("writing {}", self.path.display()))?;
@@ -425,6 +421,24 @@ mod tests {
         let (t, _) = Table::read(&path).unwrap();
         assert_eq!(t.header, ["a", "seed", "failed", "run_dir"]);
         assert_eq!(t.rows, [["1", "1", "true", "runs/1-s1"]]);
+    }
+
+    #[test]
+    fn a_link_planted_as_sweep_csv_is_refused_and_its_target_untouched() {
+        let dir = tempfile::tempdir().unwrap();
+        let victim = dir.path().join("victim");
+        std::fs::write(&victim, "keep").unwrap();
+        let path = dir.path().join("sweep.csv");
+        std::os::unix::fs::symlink(&victim, &path).unwrap();
+        let mut csv = SweepCsv::open(&path, &["a".to_string()], None).unwrap();
+        let err = csv
+            .push(row(&["1"], 1, json!({"failed": false})))
+            .unwrap_err();
+        assert!(
+            format!("{err:#}").contains("is a symbolic link; refusing to follow it"),
+            "{err:#}"
+        );
+        assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep");
     }
 
     #[test]

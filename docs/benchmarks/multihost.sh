@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
-# Per-tick cost of a run split over emulated hosts (issue 16), for docs/benchmarks.md.
+# Per-tick cost of a run split over emulated hosts (issues 16 and 32), for docs/benchmarks.md.
 #
 # Builds three emulated hosts (network namespaces on a bridge, each with a private /dev/shm,
 # as tests/src/lab.rs does), then runs configs/goto_simple.toml at 100 and 500 robots:
 # all on one host, half on a second host, a third on each of three hosts, and every robot on
-# one remote host (the world alone on its own). Prints a markdown table. Needs root.
+# one remote host (the world alone on its own). Every split runs twice, back to back: over
+# the default link (QUIC with mutual TLS, certificates from `swarm certs`) and over plain TCP
+# (`--insecure-link`), so the TLS column's ratio is read within one run. Prints a markdown
+# table. Needs root.
 #
 #   bash docs/benchmarks/multihost.sh [ticks_100] [ticks_500]
 set -euo pipefail
@@ -42,10 +45,14 @@ done
 sleep 0.5
 launcher() { echo "\"nsenter\", \"-t\", \"${HOLDERS[$1]}\", \"-n\", \"-m\", \"--\""; }
 
-# hosts.toml with robots counts for hosts 1, 2 (an empty count: that host is unused).
+# hosts.toml (link: quic or tcp) with robots counts for hosts 1, 2 (an empty count: that
+# host is unused); a quic file gets its certificates in certs/ beside it.
 hosts_file() {
-  local f=$OUT/hosts-$1-$2.toml
-  printf '[world]\nlisten = "tcp/10.77.0.1:7447"\n' >"$f"
+  local link=$1
+  shift
+  mkdir -p "$OUT/hosts-$link-$1-$2"
+  local f=$OUT/hosts-$link-$1-$2/hosts.toml
+  printf '[world]\nlisten = "%s/10.77.0.1:7447"\n' "$link" >"$f"
   local i=1
   for c in "$2" "$3"; do
     if [ -n "$c" ]; then
@@ -53,6 +60,9 @@ hosts_file() {
     fi
     i=$((i + 1))
   done
+  if [ "$link" = quic ]; then
+    "$SWARM" certs "$f" >/dev/null
+  fi
   echo "$f"
 }
 
@@ -71,17 +81,22 @@ for s in [f"robots.count={n}", f"scenario.ticks={ticks}", "scenario.stop_when_do
 EOF
 }
 
-run() { # name n ticks [hosts file]
-  local dir=$OUT/$1-$2
+run() { # name n ticks [link hosts-file]
+  local dir=$OUT/$1-$2-${4:-local}
+  dir=${dir// /_}
   mapfile -t S < <(sets "$2" "$3")
   local extra=()
-  [ -n "${4:-}" ] && extra=(--hosts "$4")
+  if [ -n "${5:-}" ]; then
+    extra=(--hosts "$5")
+    [ "$4" = tcp ] && extra+=(--insecure-link)
+  fi
   nsenter -t "${HOLDERS[0]}" -n -m --wd="$PWD" -- \
     "$SWARM" run configs/goto_simple.toml "${S[@]}" "${extra[@]}" --out "$dir" >/dev/null
   python3 - "$dir" "$1" "$2" <<'EOF'
 import json, sys
 d, name, n = sys.argv[1], sys.argv[2], sys.argv[3]
 m = json.load(open(d + "/metrics.json"))
+link_kind = m.get("link", "-")
 t = m["shell"]["timing"]
 ticks = max(t["ticks"], 1)
 tick = 1000 * t["seconds"] / ticks
@@ -89,22 +104,28 @@ link = m["shell"].get("link", [])
 per_host = ", ".join(
     f'{h["host"]} {h["bytes_down"] / ticks / 1024:.0f} KiB down / {h["bytes_up"] / ticks / 1024:.0f} KiB up'
     for h in link) or "-"
-print(f'| {n} | {name} | {tick:.2f} | {t["tick_ms_median"]:.2f} | {t["publish_ms_mean"]:.2f} | '
+print(f'| {n} | {name} | {link_kind} | {tick:.2f} | {t["tick_ms_median"]:.2f} | {t["publish_ms_mean"]:.2f} | '
       f'{t["wait_ms_mean"]:.2f} | {t["step_ms_mean"]:.2f} | {per_host} | {m["reproducible"]} |')
 EOF
 }
 
-echo "| robots | split | tick ms (mean) | tick ms (median) | publish ms | wait ms | step ms | bytes per tick per host | reproducible |"
-echo "|---|---|---|---|---|---|---|---|---|"
+echo "| robots | split | link | tick ms (mean) | tick ms (median) | publish ms | wait ms | step ms | bytes per tick per host | reproducible |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 for n in 100 500; do
   ticks=$T100
   [ "$n" = 500 ] && ticks=$T500
   half=$((n / 2))
   third=$((n / 3))
   run "one host" "$n" "$ticks"
-  run "2 hosts (half remote)" "$n" "$ticks" "$(hosts_file 2 "$half" "")"
-  run "3 hosts (thirds)" "$n" "$ticks" "$(hosts_file 3 "$third" "$third")"
-  run "all on 1 remote host" "$n" "$ticks" "$(hosts_file r "$n" "")"
+  for link in quic tcp; do
+    run "2 hosts (half remote)" "$n" "$ticks" $link "$(hosts_file $link 2 "$half" "")"
+  done
+  for link in quic tcp; do
+    run "3 hosts (thirds)" "$n" "$ticks" $link "$(hosts_file $link 3 "$third" "$third")"
+  done
+  for link in quic tcp; do
+    run "all on 1 remote host" "$n" "$ticks" $link "$(hosts_file $link r "$n" "")"
+  done
 done
 echo
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); run dirs in $OUT"

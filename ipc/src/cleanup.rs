@@ -22,6 +22,26 @@ fn start_time(pid: i32) -> Option<u64> {
     rest.split_whitespace().nth(19)?.parse().ok()
 }
 
+/// A shared-memory base swarm will not use (a link, another user's, writable by others, too
+/// long): the user's to fix, in one line. Carried inside the `io::Error` of [`claim`].
+#[derive(Debug, Clone)]
+pub struct BaseRefused(pub String);
+
+impl std::fmt::Display for BaseRefused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BaseRefused {}
+
+impl BaseRefused {
+    /// The refusal inside `e`, if `e` is one.
+    pub fn of(e: &io::Error) -> Option<&BaseRefused> {
+        e.get_ref().and_then(|inner| inner.downcast_ref())
+    }
+}
+
 /// Marks `run_id` as owned by this process, so `swarm clean` leaves it alone while it lives.
 /// The root appears atomically (built aside, then renamed) with its owner file inside, so a
 /// concurrent `swarm clean` never sees an unowned root of a live run.
@@ -59,11 +79,11 @@ fn check_base_len(base: &Path, run_id: &str) -> io::Result<()> {
     if len > max {
         return Err(io::Error::new(
             io::ErrorKind::InvalidInput,
-            format!(
+            BaseRefused(format!(
                 "refusing the shared-memory root {}: {len} bytes long, longer than the {max} \
                  iceoryx2's socket paths leave room for; choose a shorter path",
                 base.display()
-            ),
+            )),
         ));
     }
     Ok(())
@@ -144,7 +164,10 @@ fn check_base_for(base: &Path, euid: u32) -> io::Result<()> {
     let refuse = |kind: io::ErrorKind, why: String| {
         Err(io::Error::new(
             kind,
-            format!("refusing the shared-memory root {}: {why}", base.display()),
+            BaseRefused(format!(
+                "refusing the shared-memory root {}: {why}",
+                base.display()
+            )),
         ))
     };
     let meta = std::fs::symlink_metadata(base)?;

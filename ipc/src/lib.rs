@@ -52,11 +52,37 @@ pub fn ipc_config(run: &RunServices) -> Result<Config, IpcError> {
 /// (`iox2 service list`, `hz`, `subscribe`, `record`) read `config/iceoryx2.toml` from their
 /// working directory, and a robot in another language loads it as its node's config.
 pub fn write_config_file(run: &RunServices, path: &std::path::Path) -> Result<(), IpcError> {
+    use std::io::Write;
+    use std::os::unix::fs::OpenOptionsExt;
     let text = toml::to_string(&ipc_config(run)?)?;
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir)?;
+        // The file and the directory it is in are never links (docs/security.md).
+        if std::fs::symlink_metadata(dir)?.file_type().is_symlink() {
+            return Err(std::io::Error::other(format!(
+                "{} is a symbolic link; refusing to follow it",
+                dir.display()
+            ))
+            .into());
+        }
     }
-    std::fs::write(path, text)?;
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .custom_flags(libc::O_NOFOLLOW)
+        .open(path)
+        .map_err(|e| {
+            if e.raw_os_error() == Some(libc::ELOOP) {
+                std::io::Error::other(format!(
+                    "{} is a symbolic link; refusing to follow it",
+                    path.display()
+                ))
+            } else {
+                e
+            }
+        })?;
+    file.write_all(text.as_bytes())?;
     Ok(())
 }
 

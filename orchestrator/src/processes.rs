@@ -177,7 +177,13 @@ pub fn run_on_hosts(
 ) -> anyhow::Result<ProcessOutcome> {
     let run_id = new_run_id();
     let run = RunServices::new(&run_id);
-    cleanup::claim(&run_id).context("cannot create the run's iceoryx2 directory")?;
+    if let Err(e) = cleanup::claim(&run_id) {
+        // A base swarm refuses is the user's to fix: its one line, typed for exit 2.
+        if let Some(r) = cleanup::BaseRefused::of(&e) {
+            return Err(r.clone().into());
+        }
+        return Err(anyhow::Error::new(e).context("cannot create the run's iceoryx2 directory"));
+    }
     let result = supervise(cfg, config_path, dir, opts, &run, interrupt, &mut progress);
     let removed = cleanup::remove_run(&run_id);
     tracing::debug!(run_id, removed, "run resources removed");

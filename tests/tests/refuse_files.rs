@@ -273,3 +273,58 @@ fn a_robot_with_corrupt_raft_storage_refuses_to_start() {
     );
     assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep");
 }
+
+/// The same through `swarm run`, as a user meets it: robot 2 is restarted at tick 60 and its
+/// new process finds its storage corrupt (a wrapper flips a byte in the first of its two
+/// records, then execs `swarm-agent`). The robot refuses to start, the run goes on without
+/// it, names the file on stderr and records the death with its exit code 2.
+#[test]
+fn a_restarted_robot_with_corrupt_storage_is_a_death_the_run_names() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("raft");
+    let agent = bin_dir().join("swarm-agent");
+    // $0 is the agent; its arguments follow. Incarnation 1 is the restarted process.
+    let wrapper = r#"inc=; st=; prev=
+for a in "$@"; do
+  case $prev in --incarnation) inc=$a ;; --storage) st=$a ;; esac
+  prev=$a
+done
+if [ "$inc" = 1 ]; then printf '\377' | dd of="$st/raft-2.state" bs=1 seek=9 conv=notrunc 2>/dev/null; fi
+exec "$0" "$@""#;
+    let program = format!(
+        "robots.programs=[{{robots=\"2\", program=[\"sh\", \"-c\", {wrapper:?}, {:?}]}}]",
+        agent.display().to_string()
+    );
+    let out = swarm(
+        &[
+            "run",
+            "configs/raft_election.toml",
+            "--ticks",
+            "160",
+            "--set",
+            "faults.restart=[{tick=60,robot=2,down_ticks=20}]",
+            "--set",
+            &program,
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        LIMIT,
+    );
+    let err = stderr(&out);
+    let file = dir.join("storage/raft-2.state");
+    assert!(
+        err.lines().any(|l| l.starts_with(&format!(
+            "robot 2's Raft storage {} is corrupt at record 1 (byte 0): checksum mismatch; refusing to start",
+            file.display()
+        ))),
+        "the robot's one line reaches the user:\n{err}"
+    );
+    let m = metrics(&dir);
+    assert_eq!(m["ticks"], 160, "the run went on: {m}");
+    assert_eq!(m["unscheduled_deaths"][0]["robot"], 2, "{m}");
+    assert_eq!(
+        m["unscheduled_deaths"][0]["how"], "exited with code 2",
+        "{m}"
+    );
+    assert_eq!(m["reproducible"], false, "{m}");
+}

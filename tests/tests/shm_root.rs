@@ -224,7 +224,11 @@ fn run_with_base(base: &Path, out: &Path, extra: &[&str]) -> Output {
 /// `empty` (the base, or where it points) empty.
 fn assert_refused(out: &Output, line: &str, empty: &Path) {
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "a bad base is refused: {err}");
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "a bad base is the user's to fix: {err}"
+    );
     assert!(
         err.lines().any(|l| l.contains(line)),
         "stderr names the path and the reason in one line ({line:?}):\n{err}"

@@ -47,7 +47,6 @@
 
 use std::collections::BTreeMap;
 use std::fmt;
-use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
@@ -132,7 +131,7 @@ pub struct ChannelCount {
 pub fn write_mcap(run_dir: &Path, out: &Path) -> anyhow::Result<Summary> {
     let run = RunInput::read(run_dir)?;
     let tmp = partial_path(out);
-    let file = File::create(&tmp)
+    let file = swarmrt_scenario::safe_fs::create_nofollow(&tmp)
         .map_err(|e| BadInput(format!("cannot create {}: {e}", tmp.display())))?;
     let result = write_run(&run, BufWriter::new(file));
     let counts = match result {

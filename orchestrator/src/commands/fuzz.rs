@@ -177,7 +177,7 @@ fn fuzz_consensus(a: &ConsensusArgs, interrupt: &Receiver<()>) -> SwarmResult<()
             }
             if let (Some(dir), Some(ev)) = (&a.dump, &out.events) {
                 let p = dir.join(format!("seed-{seed}.events.jsonl"));
-                std::fs::write(&p, ev)?;
+                swarmrt_scenario::safe_fs::write_nofollow(&p, ev)?;
                 pb.suspend(|| println!("  notes: {}", p.display()));
             }
         }

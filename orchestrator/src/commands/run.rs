@@ -164,8 +164,15 @@ fn run_with(
             Err(e) => {
                 pb.finish_and_clear();
                 // A bad or unreachable host is the user's to fix: one line, exit 2.
-                if let Some(h) = e.downcast_ref::<crate::hosts::HostFailure>() {
-                    let line = h.to_string();
+                // So is a shared-memory base that swarm refuses to use.
+                let user_line = e
+                    .downcast_ref::<crate::hosts::HostFailure>()
+                    .map(|h| h.to_string())
+                    .or_else(|| {
+                        e.downcast_ref::<swarmrt_ipc::cleanup::BaseRefused>()
+                            .map(|r| r.to_string())
+                    });
+                if let Some(line) = user_line {
                     let _ = failed_early(&dir, &cfg, metrics, started, e);
                     return Err(SwarmError::User(line));
                 }

@@ -504,9 +504,7 @@ fn write_reports(
         mode: mode(args.pool.in_process),
     };
     let md = report::summary_md(&head, &table, &groups, &metrics, &plots);
-    let tmp = out.join("summary.md.tmp");
-    std::fs::write(&tmp, md)?;
-    std::fs::rename(&tmp, out.join("summary.md"))?;
+    swarmrt_scenario::safe_fs::write_replace_nofollow(&out.join("summary.md"), md)?;
     Ok(finished)
 }
 

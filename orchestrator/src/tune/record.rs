@@ -182,10 +182,7 @@ impl TuneCsv {
     pub fn open(path: &Path, params: &[Param]) -> anyhow::Result<TuneCsv> {
         let header = header(params);
         let fresh = std::fs::metadata(path).map_or(true, |m| m.len() == 0);
-        let mut file = std::fs::OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(path)
+        let mut file = swarmrt_scenario::safe_fs::open_append_nofollow(path)
             .with_context(|| format!("cannot open {}", path.display()))?;
         if fresh {
             file.write_all(header.as_bytes())?;
@@ -213,22 +210,17 @@ impl TuneCsv {
             text.push_str(&r.line());
         }
         write_atomic(&self.path, &text)?;
-        self.file = std::fs::OpenOptions::new()
-            .append(true)
-            .open(&self.path)
+        self.file = swarmrt_scenario::safe_fs::open_append_nofollow(&self.path)
             .with_context(|| format!("cannot open {}", self.path.display()))?;
         Ok(())
     }
 }
 
-/// Writes `text` to `path` through a temporary file and a rename: never a torn file.
+/// Writes `text` to `path` through a temporary file and a rename: never a torn file, and
+/// never through a planted symbolic link.
 pub fn write_atomic(path: &Path, text: &str) -> anyhow::Result<()> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, text).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+    swarmrt_scenario::safe_fs::write_replace_nofollow(path, text)
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 /// Everything that decides a tune's evaluations and their results; a resume must match it.
