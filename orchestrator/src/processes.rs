@@ -28,10 +28,8 @@ pub use swarmrt_scenario::process::{child_command, describe, signal_all};
 
 /// How long robots get to exit on the world's shutdown sample before they are sent SIGTERM
 /// (a robot that subscribed after that sample never sees it). The wait ends as soon as all
-/// have gone, so only a robot that missed the sample pays it. 10 s because under the whole
-/// test suite on a 2-core machine a thawed robot took more than 1 s (a Rust robot,
-/// `tests/tests/faults.rs`) and then more than 3 s (a Python robot, caught by SIGTERM while
-/// its interpreter was finalizing, `tests/tests/python_robots.rs`) to see it and exit.
+/// have gone, so only a robot that missed the sample pays it: 10 s leaves a loaded 2-core
+/// machine room (a thawed robot once took more than 1 s there, `tests/tests/faults.rs`).
 const SHUTDOWN_GRACE: Duration = Duration::from_secs(10);
 /// How long a host launcher's exit waits for the end of its stdout, which a process it
 /// started may still hold open.
@@ -369,7 +367,7 @@ struct LocalRun {
     world_eof: bool,
     /// How the world's process ended, once reaped.
     world_exit: Option<String>,
-    /// False once the world's process was reaped (the run's end then has no grace).
+    /// False once the world's process was reaped (a failed world's run ends with no grace).
     world_alive: bool,
     /// The world reported tick 0.
     ready: bool,
@@ -719,8 +717,11 @@ impl LocalRun {
         drop(self.world_stdin.take());
         // The world told robots to exit (or died): give them a moment to go by themselves,
         // then SIGTERM, then SIGKILL. Each host sees its robots out after the world's
-        // shutdown, then exits; its launcher is watched with the rest.
-        let grace = if self.world_alive {
+        // shutdown, then exits; its launcher is watched with the rest. A world that already
+        // exited cleanly did publish the shutdown (it is often reaped before this point, and
+        // a robot thawed just then was SIGTERMed mid-exit): only a failed world gives none.
+        let world_clean = self.world_exit.as_deref() == Some(CLEAN_EXIT);
+        let grace = if self.world_alive || world_clean {
             SHUTDOWN_GRACE
         } else {
             Duration::ZERO

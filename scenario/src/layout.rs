@@ -157,6 +157,10 @@ impl Config {
             None => g,
         };
         if self.robots.aerial.is_some() {
+            // Two UAVs cannot hover in one cell: each member of a group gets its own slot.
+            if let Some((x, y)) = self.aerial_goal_slot(id) {
+                (goal.x, goal.y) = (x, y);
+            }
             goal.z = Some(
                 group
                     .and_then(|s| s.goal_z)
@@ -165,6 +169,79 @@ impl Config {
             );
         }
         goal
+    }
+
+    /// An aerial robot's own goal point when its start group has several members: the group's
+    /// goal points laid out like a start group ([`nearest_grid_points`], nearest the group's
+    /// goal first) but twice `robots.start.spacing` apart, every group's slots kept that far
+    /// from the slots of groups before it. Twice: a hovering UAV keeps a safe zone around it
+    /// (seed 002's eq. 1, one start spacing in its configs), so the next slot must lie past it. The group's first member keeps the goal itself, so a
+    /// one-member group is unchanged. `None` for a one-member group, or when the slots do not
+    /// fit the map (the planner's validation then names the shared goal).
+    fn aerial_goal_slot(&self, id: u32) -> Option<(f64, f64)> {
+        let n = self.robots.count;
+        let mine = self.start_group(id);
+        let members = |g: usize| (0..n).filter(move |&i| self.start_group(i) == g);
+        if members(mine).count() < 2 {
+            return None;
+        }
+        let spacing = 2.0 * self.robots.start.spacing;
+        let min_gap = spacing * 0.999;
+        let mut taken: Vec<(f64, f64)> = Vec::new();
+        for g in 0..=mine {
+            let ids: Vec<u32> = members(g).collect();
+            let centre = match self.robots.start.groups.get(g).and_then(|s| s.goal) {
+                Some([x, y]) => (x, y),
+                None => (self.map.goal.x, self.map.goal.y),
+            };
+            let before = taken.clone();
+            let z = self.robots.start.groups.get(g).and_then(|s| s.goal_z);
+            let z = z.or(self.map.goal.z).unwrap_or(self.start_z(ids[0]));
+            let ok = |x: f64, y: f64| {
+                self.clear_of_obstacles(x, y, z)
+                    && before
+                        .iter()
+                        .all(|p| (p.0 - x).powi(2) + (p.1 - y).powi(2) >= min_gap * min_gap)
+            };
+            let points = nearest_grid_points(
+                ids.len(),
+                centre,
+                spacing,
+                self.map.bounds,
+                self.robots.radius,
+                ok,
+            )?;
+            if g == mine {
+                let k = ids.iter().position(|&i| i == id)?;
+                return points.get(k).copied();
+            }
+            taken.extend(points);
+        }
+        None
+    }
+
+    /// Whether a robot at `(x, y)` and height `z` stays more than `robots.radius` clear of every
+    /// obstacle (each a prism from the ground to its height, or to `map.height`).
+    fn clear_of_obstacles(&self, x: f64, y: f64, z: f64) -> bool {
+        let r = self.robots.radius;
+        let top = self.map.height.unwrap_or(f64::INFINITY);
+        let below = |h: Option<f64>| z < h.unwrap_or(top).min(top) + r;
+        let circles = self
+            .map
+            .circles
+            .iter()
+            .all(|c| !below(c.height) || (c.x - x).hypot(c.y - y) > c.r + r);
+        let rects = self.map.rectangles.iter().all(|b| {
+            let dx = (b.x_min - x).max(x - b.x_max).max(0.0);
+            let dy = (b.y_min - y).max(y - b.y_max).max(0.0);
+            !below(b.height) || dx.hypot(dy) > r
+        });
+        let polygons = self
+            .map
+            .polygons
+            .iter()
+            .all(|poly| !below(poly.height) || !point_near_polygon(&poly.points, (x, y), r));
+        circles && rects && polygons
     }
 
     /// The height robot `id` starts at: 0 for ground robots; for aerial ones its start
@@ -299,6 +376,32 @@ pub fn nearest_grid_points(
         }
     }
     None
+}
+
+/// Whether `p` is inside the polygon `pts` (even-odd rule) or at most `margin` from an edge.
+fn point_near_polygon(pts: &[[f64; 2]], p: (f64, f64), margin: f64) -> bool {
+    let n = pts.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (pts[i], pts[(i + 1) % n]);
+        if (a[1] > p.1) != (b[1] > p.1) {
+            let x = a[0] + (p.1 - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if p.0 < x {
+                inside = !inside;
+            }
+        }
+        let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+        let len2 = ex * ex + ey * ey;
+        let t = if len2 > 0.0 {
+            (((p.0 - a[0]) * ex + (p.1 - a[1]) * ey) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        if (a[0] + t * ex - p.0).hypot(a[1] + t * ey - p.1) <= margin {
+            return true;
+        }
+    }
+    inside
 }
 
 /// Metres a third robot must lie off the line through two others for the three not to count

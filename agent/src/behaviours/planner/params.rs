@@ -6,6 +6,8 @@ use swarmrt_scenario::reference::{Bounds, Key, Lim, check_f, check_u, k, lo, r};
 use swarmrt_scenario::validate::{check, range_f};
 use swarmrt_scenario::{Config, KeyError};
 
+use swarmrt_planner::Cell;
+
 use crate::behaviour::Params;
 
 /// Parameters of the route planner behaviour.
@@ -128,8 +130,71 @@ impl Params for PlannerParams {
         check_u(keys, "behaviour.lost_after", self.lost_after as u64)?;
         check_u(keys, "behaviour.settle", self.settle as u64)?;
         check_f(keys, "behaviour.gain", self.gain)?;
-        check_u(keys, "behaviour.max_expansions", self.max_expansions as u64)
+        check_u(keys, "behaviour.max_expansions", self.max_expansions as u64)?;
+        check_goal_cells(cfg, self)
     }
+}
+
+/// Every UAV needs a goal cell of its own, free, and outside the others' safe zones: a UAV
+/// parked at its goal holds its zone for ever (eq. 1), so a second UAV sent there, or next
+/// to it, could never arrive and would hover until `scenario.ticks`. Refused before tick 0
+/// instead, naming the UAVs, the goal and what to change.
+fn check_goal_cells(cfg: &Config, p: &PlannerParams) -> Result<(), KeyError> {
+    let Ok(grid) = super::scene::grid(cfg, p) else {
+        return Ok(()); // the grid's own error is reported where the grid is built
+    };
+    let goals: Vec<(u32, Cell, [f64; 3])> = (0..cfg.robots.count)
+        .filter_map(|id| {
+            let (_, g) = super::scene::start_and_goal(cfg, id)?;
+            Some((id, grid.nearest_cell(g), g))
+        })
+        .collect();
+    let at = |g: [f64; 3]| {
+        format!(
+            "({}, {}, {})",
+            swarmrt_scenario::validate::short(g[0]),
+            swarmrt_scenario::validate::short(g[1]),
+            swarmrt_scenario::validate::short(g[2])
+        )
+    };
+    for (id, cell, g) in &goals {
+        if grid.blocked(*cell) {
+            return Err((
+                "robots.start.groups".to_string(),
+                format!(
+                    "expected a goal in free space for every UAV, but robot {id}'s goal {} is in an \
+                     obstacle (or within robots.radius of one): move its group's goal",
+                    at(*g)
+                ),
+            ));
+        }
+    }
+    let cell_dist = |a: Cell, b: Cell| {
+        let d = |x: u16, y: u16| (f64::from(x) - f64::from(y)).powi(2);
+        (d(a.i, b.i) + d(a.j, b.j) + d(a.k, b.k)).sqrt() * p.cell
+    };
+    for (n, (a, ca, ga)) in goals.iter().enumerate() {
+        let close: Vec<String> = goals[n + 1..]
+            .iter()
+            .filter(|(_, cb, _)| cell_dist(*ca, *cb) <= p.clearance + 1e-9)
+            .map(|(b, _, _)| b.to_string())
+            .collect();
+        if !close.is_empty() {
+            return Err((
+                "robots.start.groups".to_string(),
+                format!(
+                    "expected every UAV's goal more than behaviour.clearance = {} m from the others', \
+                     but robots {a}, {} share the goal {}: give each UAV its own start group \
+                     and goal, or raise robots.start.spacing (a group's goals lie 2 x spacing \
+                     apart)",
+                    swarmrt_scenario::validate::short(p.clearance),
+                    close.join(", "),
+                    at(*ga)
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 impl PlannerParams {
