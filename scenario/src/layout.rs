@@ -173,11 +173,12 @@ impl Config {
 
     /// An aerial robot's own goal point when its start group has several members: the group's
     /// goal points laid out like a start group ([`nearest_grid_points`], nearest the group's
-    /// goal first) but twice `robots.start.spacing` apart, every group's slots kept that far
-    /// from the slots of groups before it. Twice: a hovering UAV keeps a safe zone around it
-    /// (seed 002's eq. 1, one start spacing in its configs), so the next slot must lie past it. The group's first member keeps the goal itself, so a
-    /// one-member group is unchanged. `None` for a one-member group, or when the slots do not
-    /// fit the map (the planner's validation then names the shared goal).
+    /// goal first) but twice `robots.start.spacing` apart, kept that far from the slots of
+    /// the groups before it and from every other group's goal, and clear of obstacles at the
+    /// goal's height. Twice: a hovering UAV keeps a safe zone around it (seed 002's eq. 1, one
+    /// start spacing in its configs), so the next slot must lie past it. A group's first member
+    /// keeps the goal itself when it is clear. `None` for a one-member group (unchanged), or
+    /// when the slots do not fit the map (the planner's validation then names the shared goal).
     fn aerial_goal_slot(&self, id: u32) -> Option<(f64, f64)> {
         let n = self.robots.count;
         let mine = self.start_group(id);
@@ -187,14 +188,24 @@ impl Config {
         }
         let spacing = 2.0 * self.robots.start.spacing;
         let min_gap = spacing * 0.999;
+        let centre_of = |g: usize| match self.robots.start.groups.get(g).and_then(|s| s.goal) {
+            Some([x, y]) => (x, y),
+            None => (self.map.goal.x, self.map.goal.y),
+        };
+        let groups = self.start_group_count();
         let mut taken: Vec<(f64, f64)> = Vec::new();
         for g in 0..=mine {
             let ids: Vec<u32> = members(g).collect();
-            let centre = match self.robots.start.groups.get(g).and_then(|s| s.goal) {
-                Some([x, y]) => (x, y),
-                None => (self.map.goal.x, self.map.goal.y),
-            };
-            let before = taken.clone();
+            let centre = centre_of(g);
+            // Every other group's own goal stays its first member's; earlier groups' slots
+            // are taken.
+            let mut before = taken.clone();
+            before.extend(
+                (0..groups)
+                    .filter(|&o| o != g && members(o).next().is_some())
+                    .map(centre_of)
+                    .filter(|&c| c != centre),
+            );
             let z = self.robots.start.groups.get(g).and_then(|s| s.goal_z);
             let z = z.or(self.map.goal.z).unwrap_or(self.start_z(ids[0]));
             let ok = |x: f64, y: f64| {

@@ -315,3 +315,52 @@ fn a_path_too_short_or_mixed_with_a_grid_is_refused_with_its_key() {
     .to_string();
     assert!(e.contains("robots 0 and 2"), "{e}");
 }
+
+const UAV_GROUPS: &str = r#"
+[robots.aerial]
+max_vertical_speed = 0.5
+start_z = 0.5
+[robots.start]
+spacing = 1.0
+groups = [
+  { x = 2.0, y = 1.0, goal = [8.0, 8.0], goal_z = 1.5 },
+  { x = 5.0, y = 1.0, goal = [5.0, 8.0], goal_z = 1.5 },
+]
+"#;
+
+/// Seed 002 at other sizes: UAVs of one start group get goal slots of their own, two start
+/// spacings apart (a hovering UAV's safe zone lies between), clear of obstacles and of the
+/// other group's slots; a group of one keeps its goal exactly.
+#[test]
+fn uavs_of_one_group_get_their_own_goal_slots_and_a_group_of_one_keeps_its_goal() {
+    let two = load(UAV_GROUPS, &["robots.count=2", "map.height=4.0"]).unwrap();
+    assert_eq!((two.goal_of(0).x, two.goal_of(0).y), (8.0, 8.0));
+    assert_eq!((two.goal_of(1).x, two.goal_of(1).y), (5.0, 8.0));
+
+    let mast = "[[map.circles]]\nx = 8.0\ny = 6.0\nr = 0.5\n";
+    let c = load(
+        &format!("{UAV_GROUPS}{mast}"),
+        &["robots.count=8", "map.height=4.0"],
+    )
+    .unwrap();
+    let goals: Vec<(f64, f64)> = (0..8).map(|i| (c.goal_of(i).x, c.goal_of(i).y)).collect();
+    // Each group's first member keeps the group's goal.
+    assert_eq!(goals[0], (8.0, 8.0));
+    assert_eq!(goals[4], (5.0, 8.0));
+    for (i, a) in goals.iter().enumerate() {
+        assert_eq!(c.goal_of(i as u32).z, Some(1.5));
+        // Inside the map, clear of the mast.
+        assert!(
+            a.0 > 0.05 && a.0 < 9.95 && a.1 > 0.05 && a.1 < 9.95,
+            "{a:?}"
+        );
+        assert!(
+            (a.0 - 8.0).hypot(a.1 - 6.0) > 0.55,
+            "robot {i} in the mast: {a:?}"
+        );
+        for (j, b) in goals.iter().enumerate().skip(i + 1) {
+            let d = (a.0 - b.0).hypot(a.1 - b.1);
+            assert!(d >= 1.999, "robots {i} and {j}: {a:?} {b:?} {d} m apart");
+        }
+    }
+}
