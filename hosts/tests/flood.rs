@@ -10,13 +10,8 @@ use swarmrt_hosts::wire::Up;
 use swarmrt_hosts::world_side::{Heard, WorldLink, queue_capacity};
 use zenoh::Wait;
 
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
+mod support;
+use support::free_port;
 
 #[test]
 fn a_flood_is_dropped_and_counted_and_oversized_messages_never_arrive() {

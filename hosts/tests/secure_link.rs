@@ -15,13 +15,8 @@ use swarmrt_hosts::world_side::{Heard, WorldLink};
 use swarmrt_hosts::{HostsFile, certs};
 use zenoh::Wait;
 
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
+mod support;
+use support::free_port;
 
 fn hosts(dir: &Path, port: u16) -> HostsFile {
     let text = format!(
