@@ -94,6 +94,15 @@ pub struct Scenario {
     /// changes no other record.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub record_radio: bool,
+    /// With `stop_when_done`: end the run once, for this many ticks, no live robot that has
+    /// not reached its goal moved more than `robots.radius` (every one hovering or stuck), so
+    /// a run that can make no further progress says so instead of waiting out `ticks`. 0: off.
+    /// Left out of the resolved config at its default.
+    #[serde(
+        default = "default_stall_ticks",
+        skip_serializing_if = "is_default_stall_ticks"
+    )]
+    pub stall_ticks: u64,
 }
 
 /// `[map]`: the arena. Its bounds are walls.
@@ -506,6 +515,18 @@ fn default_dt() -> f64 {
 fn yes() -> bool {
     true
 }
+/// 60 s at the usual 0.1 s tick: longer than any wait a behaviour of `configs/` plans (a
+/// planner's settle and re-plan, a chain's veto), short against a run that is stuck for good.
+pub const DEFAULT_STALL_TICKS: u64 = 600;
+
+fn default_stall_ticks() -> u64 {
+    DEFAULT_STALL_TICKS
+}
+
+fn is_default_stall_ticks(v: &u64) -> bool {
+    *v == DEFAULT_STALL_TICKS
+}
+
 fn default_deadline_ms() -> u64 {
     2000
 }

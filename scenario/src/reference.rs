@@ -184,6 +184,7 @@ pub const KEYS: &[Key] = &[
     k("scenario.stop_when_done", Bounds::Any, "", "End early once every robot reached the goal or is down or dead."),
     k("scenario.deadline_ms", r(1.0, 3_600_000.0), "ms", "A robot that has not answered within this is logged as late."),
     k("scenario.unresponsive_ms", Bounds::Range(Lim::Of("scenario.deadline_ms"), Lim::V(86_400_000.0)), "ms", "A robot silent this long is marked dead and killed, so it cannot hang the run."),
+    k("scenario.stall_ticks", r(0.0, 100_000_000.0), "ticks", "With stop_when_done: end once no live robot short of its goal moved more than robots.radius for this long (0: off).").absent("600"),
     k("scenario.record_radio", Bounds::Any, "", "Write `radio.csv`: one line per radio copy delivered or dropped, with the reason.").absent("false"),
     // [map]
     k("map.bounds", COORD, "m", "The arena's walls.").also("max > min").ty("[min_x, min_y, max_x, max_y]"),
@@ -336,6 +337,7 @@ stop_when_done = true
 deadline_ms = 2000
 unresponsive_ms = 30000
 record_radio = true
+stall_ticks = 600
 
 [map]
 bounds = [0.0, 0.0, 10.0, 10.0]

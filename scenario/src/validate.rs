@@ -37,6 +37,7 @@ impl Config {
         u("scenario.ticks", s.ticks)?;
         f("scenario.dt", s.dt)?;
         u("scenario.deadline_ms", s.deadline_ms)?;
+        u("scenario.stall_ticks", s.stall_ticks)?;
         range_u64(
             "scenario.unresponsive_ms",
             s.unresponsive_ms,

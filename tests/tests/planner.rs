@@ -335,3 +335,45 @@ fn routes_longer_than_one_frame_commit_in_parts_and_are_flown_whole() {
     assert_eq!(p["collisions"], 0, "{p}");
     assert_eq!(p["conflicts"], 0, "{p}");
 }
+
+#[test]
+fn a_run_whose_uavs_all_stall_ends_early_with_the_reason_in_both_modes() {
+    // Two of three UAVs die before any plan: the survivor has no majority, no leader plans,
+    // and it hovers at its start for good.
+    let tmp = tempfile::tempdir().unwrap();
+    let mut dirs = Vec::new();
+    for mode in ["processes", "in-process"] {
+        let dir = tmp.path().join(mode);
+        let mut args = vec![
+            "run",
+            CONFIG,
+            "--out",
+            dir.to_str().unwrap(),
+            "--set",
+            "faults.kill=[{tick=5,robot=1},{tick=5,robot=2}]",
+            "--set",
+            "scenario.stall_ticks=100",
+        ];
+        if mode == "in-process" {
+            args.push("--in-process");
+        }
+        let out = swarm(&args, Duration::from_secs(120));
+        assert_ok(&out);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("run stalled at tick 101: robot 0 short of the goal")
+                && err.contains("scenario.stall_ticks"),
+            "{mode}: {err}"
+        );
+        let m = swarmrt_tests::metrics(&dir);
+        assert_eq!(m["ticks"], 101, "{mode}: {m}");
+        assert_eq!(
+            m["stalled"]["robots"],
+            serde_json::json!([0]),
+            "{mode}: {m}"
+        );
+        assert_eq!(m["stalled"]["ticks"], 100, "{mode}: {m}");
+        dirs.push(dir);
+    }
+    swarmrt_tests::assert_same_records(&dirs[0], &dirs[1], "a stalled run");
+}

@@ -46,4 +46,4 @@ pub mod records;
 pub mod rng;
 pub mod world;
 
-pub use world::{Event, ProcessSignal, Robot, Stage, StageTimes, World, WorldMetrics};
+pub use world::{Event, ProcessSignal, Robot, Stage, StageTimes, Stalled, World, WorldMetrics};

@@ -251,6 +251,13 @@ fn run_with(
     if let Err(e) = swarmrt_analysis::series::write_all(&cfg, &dir) {
         tracing::warn!("could not write the behaviour's per-tick tables: {e:#}");
     }
+    // A stalled run ended early with robots short of their goal: say so, not only in the file.
+    if let Some(stalled) = metrics
+        .get("stalled")
+        .and_then(|v| serde_json::from_value::<swarmrt_world::Stalled>(v.clone()).ok())
+    {
+        eprintln!("swarm: {}", stalled.line());
+    }
     println!("{}", dir.display());
     if let Some(f) = failure {
         return Err(SwarmError::Internal(anyhow::anyhow!(

@@ -35,11 +35,14 @@ mod kinematics;
 mod route;
 mod sensing;
 mod stage_times;
+mod stall;
 
 use faults::Outage;
 pub use faults::ProcessSignal;
 pub use sensing::{OBSERVE_THREADS, PARALLEL_OBSERVE_MIN, worker_threads};
 pub use stage_times::{Stage, StageTimes};
+use stall::StallWatch;
+pub use stall::Stalled;
 
 /// The truth about one robot.
 #[derive(Debug, Clone, PartialEq)]
@@ -97,6 +100,10 @@ pub struct WorldMetrics {
     pub frozen_ticks: u64,
     /// Radio counters.
     pub radio: RadioStats,
+    /// Why the run ended early with robots short of their goal (`scenario.stall_ticks`);
+    /// absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stalled: Option<Stalled>,
 }
 
 /// The world of one run.
@@ -126,6 +133,8 @@ pub struct World {
     fault_rng: Rng,
     /// Wall-clock time per stage, while the shell has timing on.
     stage_times: StageTimes,
+    /// Where each robot last moved, for `scenario.stall_ticks`.
+    stall: StallWatch,
 }
 
 impl World {
@@ -187,6 +196,7 @@ impl World {
             incarnations: vec![0; n],
             fault_rng: rng::stream(seed, "faults", 0),
             stage_times: StageTimes::default(),
+            stall: StallWatch::default(),
             robots,
         };
         world.check_goal();
@@ -227,9 +237,11 @@ impl World {
     }
 
     /// True when the run should end: the tick budget is spent, or (with
-    /// `scenario.stop_when_done`) every robot reached the goal or is down or dead.
+    /// `scenario.stop_when_done`) every robot reached the goal or is down or dead, or the run
+    /// stalled ([`WorldMetrics::stalled`]).
     pub fn finished(&self) -> bool {
         self.tick >= self.cfg.scenario.ticks
+            || self.metrics.stalled.is_some()
             || (self.cfg.scenario.stop_when_done
                 && self
                     .robots
@@ -277,6 +289,7 @@ impl World {
         self.timed(Stage::Radio, |w| w.deliver_radio());
         self.timed(Stage::Sensing, |w| w.check_goal());
         self.timed(Stage::Faults, |w| w.apply_faults());
+        self.check_stall();
     }
 
     /// Switches the radio record on or off (off when the world is built; the shells switch it
