@@ -57,12 +57,13 @@ fn one_of_each() -> Vec<RadioMsg> {
             x: 1.5,
             y: -2.5,
         }),
-        RadioMsg::Planner(planner::Beacon {
+        RadioMsg::Planner(planner::PlannerMsg::Beacon(planner::Beacon {
             pos: [1.0, 2.0, 3.0],
             plan: 7,
             hovering: true,
             arrived: false,
-        }),
+            detour: 0,
+        })),
         RadioMsg::Chain(Link {
             x: 0.5,
             y: 0.25,

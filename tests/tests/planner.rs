@@ -153,11 +153,20 @@ fn three_uav_processes_reach_their_goals_with_no_conflict_and_no_collision() {
 #[test]
 fn killing_the_leader_mid_flight_still_brings_the_others_home_without_a_collision() {
     let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("leader_dies");
-    let m = run_config(LEADER_DIES, &dir, &[]);
+    for policy in ["continue", "hover"] {
+        let dir = tmp.path().join(policy);
+        let set = format!("behaviour.on_leader_loss=\"{policy}\"");
+        let m = run_config(LEADER_DIES, &dir, &["--set", &set]);
+        leader_killed_mid_flight(&dir, &m, policy);
+    }
+}
+
+/// What a leader killed at tick 120 leaves: the two others home, safe, and in `continue`
+/// (the paper's autonomy) on the routes the dead leader planned, without a new plan.
+fn leader_killed_mid_flight(dir: &Path, m: &serde_json::Value, policy: &str) {
     let p = &m["planner"];
     // Exactly one robot died: the leader at tick 120, while all three were flying.
-    let events = String::from_utf8(bytes(&dir, "events.jsonl")).unwrap();
+    let events = String::from_utf8(bytes(dir, "events.jsonl")).unwrap();
     let died: Vec<&str> = events
         .lines()
         .filter(|l| l.contains("\"event\":\"died\""))
@@ -181,26 +190,112 @@ fn killing_the_leader_mid_flight_still_brings_the_others_home_without_a_collisio
         flying_before, 3,
         "all three flew a committed route before the kill"
     );
-    // The new leader re-planned the two remaining routes and both arrived.
-    assert!(p["replans"].as_u64().unwrap() >= 1, "{p}");
-    assert_eq!(p["reached"], 2, "{p}");
-    assert_eq!(p["collisions"], 0, "{p}");
-    assert_eq!(p["conflicts"], 0, "{p}");
+    if policy == "hover" {
+        // Everyone hovered and the new leader re-planned the two remaining routes.
+        assert!(p["replans"].as_u64().unwrap() >= 1, "{p}");
+    } else {
+        // The survivors flew the committed routes on: no new plan, no stop, no detour.
+        assert_eq!(p["replans"], 0, "{p}");
+        assert_eq!(p["hovers"], 0, "{p}");
+        assert_eq!(p["detours"], 0, "{p}");
+    }
+    assert_eq!(p["reached"], 2, "{policy}: {p}");
+    assert_eq!(p["collisions"], 0, "{policy}: {p}");
+    assert_eq!(p["conflicts"], 0, "{policy}: {p}");
     let home: Vec<u32> = (0..3).filter(|&v| v != dead).collect();
-    assert_safe_and_home(&dir, &home);
+    assert_safe_and_home(dir, &home);
+}
+
+#[test]
+fn with_the_leader_cut_off_in_a_minority_the_majority_flies_on() {
+    // Seed 1's leader is robot 2 (asserted below); from tick 120 it hears no one.
+    let tmp = tempfile::tempdir().unwrap();
+    for policy in ["continue", "hover"] {
+        let dir = tmp.path().join(policy);
+        let set = format!("behaviour.on_leader_loss=\"{policy}\"");
+        let m = run_config(
+            CONFIG,
+            &dir,
+            &[
+                "--set",
+                &set,
+                "--set",
+                "faults.partition=[{from=120,to=900,groups=[[2]]}]",
+            ],
+        );
+        let events = String::from_utf8(bytes(&dir, "events.jsonl")).unwrap();
+        let first_leader = events
+            .lines()
+            .find(|l| l.contains("\"role\":\"leader\""))
+            .unwrap();
+        assert!(first_leader.contains("\"robot\":2"), "{first_leader}");
+        let p = &m["planner"];
+        assert_eq!(p["conflicts"], 0, "{policy}: {p}");
+        assert_eq!(p["collisions"], 0, "{policy}: {p}");
+        if policy == "continue" {
+            // All three fly on: the majority without its leader, the leader alone.
+            assert_eq!(p["reached"], 3, "{p}");
+            assert_eq!(p["plans"], 1, "{p}");
+            assert_safe_and_home(&dir, &[0, 1, 2]);
+        } else {
+            // The majority elects a leader who re-plans it; the old one hovers for good,
+            // and the run ends when it stalls.
+            assert_eq!(p["reached"], 2, "{p}");
+            assert!(m["stalled"]["robots"] == serde_json::json!([2]), "{m}");
+        }
+    }
+}
+
+#[test]
+fn a_uav_whose_route_a_dead_uav_blocks_plans_a_detour_on_board_and_arrives() {
+    // Robot 0 dies at tick 200 where robot 1's route passes later (within the safe zone).
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("blocked");
+    let m = run_config(CONFIG, &dir, &["--set", "faults.kill=[{tick=200,robot=0}]"]);
+    let p = &m["planner"];
+    let events = String::from_utf8(bytes(&dir, "events.jsonl")).unwrap();
+    let detours: Vec<serde_json::Value> = events
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter(|e| e["note"]["detour"].is_object())
+        .collect();
+    assert_eq!(detours.len(), 1, "{detours:?}");
+    assert_eq!(detours[0]["robot"], 1, "{detours:?}");
+    assert!(detours[0]["tick"].as_u64().unwrap() > 200, "{detours:?}");
+    assert_eq!(p["detours"], 1, "{p}");
+    assert_eq!(p["plans"], 1, "no leader re-planned: {p}");
+    assert_eq!(p["reached"], 2, "{p}");
+    assert_eq!(p["conflicts"], 0, "{p}");
+    assert_eq!(p["collisions"], 0, "{p}");
+    assert_safe_and_home(&dir, &[1, 2]);
 }
 
 #[test]
 fn both_modes_write_the_same_records_with_a_lossy_late_radio() {
     let tmp = tempfile::tempdir().unwrap();
-    let m = assert_modes_agree_with_loss(
-        tmp.path(),
-        LEADER_DIES,
-        600,
-        &[],
-        &["trajectory.csv", "events.jsonl"],
-    );
-    assert_eq!(m["planner"]["collisions"], 0, "{m}");
+    for (name, extra) in [
+        (
+            "hover",
+            &["--set", "behaviour.on_leader_loss=\"hover\""][..],
+        ),
+        ("continue", &[][..]),
+        // A dead UAV on robot 1's route: a detour planned on board and announced.
+        ("detour", &["--set", "faults.kill=[{tick=200,robot=0}]"][..]),
+    ] {
+        let dir = tmp.path().join(name);
+        std::fs::create_dir_all(&dir).unwrap();
+        let m = assert_modes_agree_with_loss(
+            &dir,
+            LEADER_DIES,
+            600,
+            extra,
+            &["trajectory.csv", "events.jsonl"],
+        );
+        assert_eq!(m["planner"]["collisions"], 0, "{name}: {m}");
+        if name == "detour" {
+            assert!(m["planner"]["detours"].as_u64().unwrap() >= 1, "{m}");
+        }
+    }
 }
 
 #[test]
@@ -298,7 +393,9 @@ fn a_restarted_leader_process_rejoins_mid_air_and_every_uav_arrives() {
     let p = &m["planner"];
     assert_eq!(p["reached"], 3, "{p}");
     assert_eq!(p["collisions"], 0, "{p}");
-    assert!(p["plans"].as_u64().unwrap() >= 2, "{p}");
+    // The fresh process finds its route's time passed: it detours on board (the paper's
+    // autonomy) instead of waiting for everyone to hover and a new plan.
+    assert!(p["detours"].as_u64().unwrap() >= 1, "{p}");
     assert_safe_and_home(&dir, &[0, 1, 2]);
 }
 
@@ -353,6 +450,8 @@ fn a_run_whose_uavs_all_stall_ends_early_with_the_reason_in_both_modes() {
             "faults.kill=[{tick=5,robot=1},{tick=5,robot=2}]",
             "--set",
             "scenario.stall_ticks=100",
+            "--set",
+            "behaviour.on_leader_loss=\"hover\"",
         ];
         if mode == "in-process" {
             args.push("--in-process");

@@ -2,6 +2,29 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::consensus::RoutePart;
+
+/// What a vehicle broadcasts.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum PlannerMsg {
+    /// Every tick: where it is and what it is doing.
+    Beacon(Beacon),
+    /// One part of the detour it planned on board (`on_leader_loss = "continue"`), sent one
+    /// part per tick in turn while it flies the detour, so a peer that lost a frame gets it
+    /// again.
+    Detour(Detour),
+}
+
+/// One part of a detour: a route a vehicle planned for itself on board, outside the log.
+/// `part.plan` is the committed plan it replaces (a newer committed plan replaces it in turn).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Detour {
+    /// The vehicle's count of its detours (higher is newer).
+    pub seq: u32,
+    /// The route part, as a log entry carries one.
+    pub part: RoutePart,
+}
+
 /// A vehicle's beacon, every tick: where it is and what it is doing. The leader plans from
 /// these positions; a vehicle that hears another one hovering in its own plan hovers too.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -14,6 +37,9 @@ pub struct Beacon {
     pub hovering: bool,
     /// At its goal, for good.
     pub arrived: bool,
+    /// The detour it flies (its count, 0: it flies its committed route or hovers), so a
+    /// vehicle that has not yet received the detour knows the committed route is stale.
+    pub detour: u32,
 }
 
 /// Why a vehicle stopped flying and hovers.
@@ -26,6 +52,9 @@ pub enum HoverWhy {
     Peer,
     /// Its route committed after the route's start: following it would cut corners in time.
     Late,
+    /// A silent or hovering vehicle, or another detour, blocks its route and it found no
+    /// detour on board (it tries again after `settle` ticks).
+    Blocked,
 }
 
 /// What a vehicle reports about itself (`events.jsonl`).
@@ -69,4 +98,20 @@ pub enum PlanNote {
     },
     /// This vehicle is at its goal.
     Arrived,
+    /// This vehicle planned its own detour on board (`on_leader_loss = "continue"`): `moves`
+    /// slots from `start_slot`, its cost and expansions, replacing plan `plan`.
+    Detour {
+        /// The committed plan it replaces.
+        plan: u32,
+        /// The vehicle's count of its detours.
+        seq: u32,
+        /// Slot of the first cell.
+        start_slot: u32,
+        /// Moves (slots) to the goal.
+        moves: u32,
+        /// Route cost: distance plus potential.
+        cost: f32,
+        /// States expanded by the search.
+        expansions: u32,
+    },
 }

@@ -22,6 +22,7 @@ pub const NAMES: &[&str] = &[
     "planner.expansions",
     "planner.no_route",
     "planner.hovers",
+    "planner.detours",
     "planner.conflicts",
     "planner.min_separation",
     "planner.reached",
@@ -129,6 +130,7 @@ pub fn metrics(cfg: &Config, p: &PlannerParams, run: &Records) -> Vec<(&'static 
     let mut plans: BTreeMap<u32, Vec<Planned>> = BTreeMap::new();
     let mut no_route = 0u64;
     let mut hovers = 0u64;
+    let mut detours = 0u64;
     for (_, _, note) in behaviour_notes::<PlanNote>(run) {
         match note {
             PlanNote::Planned {
@@ -148,6 +150,7 @@ pub fn metrics(cfg: &Config, p: &PlannerParams, run: &Records) -> Vec<(&'static 
             }),
             PlanNote::NoRoute { .. } => no_route += 1,
             PlanNote::Hover { .. } => hovers += 1,
+            PlanNote::Detour { .. } => detours += 1,
             PlanNote::Flying { .. } | PlanNote::Arrived => {}
         }
     }
@@ -171,6 +174,7 @@ pub fn metrics(cfg: &Config, p: &PlannerParams, run: &Records) -> Vec<(&'static 
         "expansions": sum(|pl| f64::from(pl.expansions)),
         "no_route": no_route,
         "hovers": hovers,
+        "detours": detours,
         "conflicts": flown_conflicts(cfg, p, run),
         "min_separation": min_separation(run),
         "reached": reached,

@@ -16,10 +16,15 @@
 //!   not simply waiting for a commit), the leader plans them all from their hover cells,
 //!   `lead_time` seconds ahead, around the parked vehicles (arrived ones at their goals, lost
 //!   ones where they were last heard), and proposes the routes, one part per tick.
+//! - **Autonomy when the plan breaks** (`on_leader_loss = "continue"`, the default, the
+//!   paper's): a vehicle flies its committed route on through a silent vehicle or a lost
+//!   leader and detours on board only when its route is blocked ([`autonomy`]). With
+//!   `"hover"` it hovers as described above and waits for a leader's plan.
 //! - **Plans belong to a term.** A plan's number is `term << 12 | count`; a vehicle takes a
 //!   route only of the term it is in, so the routes of a leader that died before they
 //!   committed can never be flown after a new leader took over.
 
+mod autonomy;
 mod messages;
 mod overlay;
 mod params;
@@ -28,15 +33,18 @@ pub mod metrics;
 
 use std::collections::{BTreeMap, VecDeque};
 
-use swarmrt_planner::{Cell, Grid, Job, PlanParams, Reservations, Route, Trajectory, plan_all};
+use swarmrt_planner::{
+    Grid, Job, PlanParams, Planner as Search, Reservations, Route, Trajectory, plan_all,
+};
 use swarmrt_protocol::{BROADCAST, Observation};
 use swarmrt_scenario::Config;
 
 use crate::behaviour::{Act, Behaviour};
 use crate::consensus::{Decision, Leadership, ROUTE_PART_MOVES, RoutePart};
 use crate::inbox::Heard;
-pub use messages::{Beacon, HoverWhy, PlanNote};
-pub use params::PlannerParams;
+use autonomy::RouteKind;
+pub use messages::{Beacon, Detour, HoverWhy, PlanNote, PlannerMsg};
+pub use params::{OnLeaderLoss, PlannerParams};
 
 /// Bits of a plan number that count plans within one term.
 const PLAN_COUNT_BITS: u32 = 12;
@@ -46,8 +54,13 @@ const PLAN_COUNT_BITS: u32 = 12;
 enum Mode {
     /// Holding `at` since tick `since`.
     Hover { at: [f64; 3], since: u64 },
-    /// Following `traj` (plan `plan`).
-    Fly { traj: Trajectory, end: f64 },
+    /// Following `traj`, the smoothed `route` (committed or a detour), until `end` seconds.
+    Fly {
+        traj: Trajectory,
+        end: f64,
+        route: Route,
+        kind: RouteKind,
+    },
     /// At the goal for good, holding `at`.
     Arrived { at: [f64; 3] },
 }
@@ -94,6 +107,19 @@ pub struct Planner {
     count: u32,
     last_tick: Option<u64>,
     pos: [f64; 3],
+    /// Other vehicles' newest complete detours: vehicle -> (seq, plan it replaces, route).
+    detours: BTreeMap<u32, (u32, u32, Route)>,
+    /// Parts of detours being received: (vehicle, seq) -> parts.
+    detour_parts: BTreeMap<(u32, u32), Vec<Option<RoutePart>>>,
+    /// This vehicle's own newest detour, as parts to announce, and its count.
+    mine: Vec<RoutePart>,
+    seq: u32,
+    /// The part of `mine` to announce next.
+    cursor: usize,
+    /// Continue mode: when a hovering vehicle tries to detour again.
+    retry_at: Option<u64>,
+    /// The on-board search, its buffers kept between detours.
+    search: Search,
 }
 
 impl Planner {
@@ -105,7 +131,11 @@ impl Planner {
         tick as f64 * self.dt
     }
 
-    fn hover(&mut self, tick: u64, why: Option<HoverWhy>, act: &mut Act<Beacon, PlanNote>) {
+    fn continues(&self) -> bool {
+        self.p.on_leader_loss == OnLeaderLoss::Continue
+    }
+
+    fn hover(&mut self, tick: u64, why: Option<HoverWhy>, act: &mut Act<PlannerMsg, PlanNote>) {
         if matches!(self.mode, Mode::Fly { .. }) {
             self.mode = Mode::Hover {
                 at: self.pos,
@@ -141,18 +171,7 @@ impl Planner {
         let Some(slots) = self.parts.remove(&key) else {
             return;
         };
-        let first = slots[0].expect("all parts are present");
-        let start = Cell {
-            i: first.start[0],
-            j: first.start[1],
-            k: first.start[2],
-        };
-        let moves: Vec<u8> = slots
-            .iter()
-            .flatten()
-            .flat_map(|p| p.moves[..(p.len as usize).min(ROUTE_PART_MOVES)].iter().copied())
-            .collect();
-        let Ok(route) = Route::from_moves(start, first.start_slot, &moves) else {
+        let Some(route) = autonomy::route_of_parts(&slots) else {
             return;
         };
         let newer = self
@@ -174,7 +193,7 @@ impl Planner {
 
     /// Takes this vehicle's newest route if it is newer than what it flies, of the current
     /// term, and not already late.
-    fn take_route(&mut self, tick: u64, act: &mut Act<Beacon, PlanNote>) {
+    fn take_route(&mut self, tick: u64, act: &mut Act<PlannerMsg, PlanNote>) {
         // Checked before the clone: this runs every tick and is almost always a no-op.
         let plan = match self.routes.get(&self.id) {
             Some((plan, _)) if *plan > self.plan => *plan,
@@ -197,6 +216,11 @@ impl Planner {
                 plan,
                 why: HoverWhy::Late,
             });
+            if self.continues() {
+                // Autonomous mode: plan from here on board, now.
+                self.hover(tick, None, act);
+                self.retry_at = Some(tick);
+            }
             return;
         }
         let at = match self.mode {
@@ -205,7 +229,13 @@ impl Planner {
         };
         let traj = Trajectory::new(&self.grid, &route, slot, Some(at), self.p.n_points as usize);
         let end = route.end_slot() as f64 * slot;
-        self.mode = Mode::Fly { traj, end };
+        self.mode = Mode::Fly {
+            traj,
+            end,
+            route,
+            kind: RouteKind::Committed(plan),
+        };
+        self.retry_at = None;
         act.note(PlanNote::Flying { plan });
     }
 
@@ -226,7 +256,7 @@ impl Planner {
     }
 
     /// As leader: plans every live vehicle that has not arrived, once they all hover.
-    fn lead_plan(&mut self, tick: u64, act: &mut Act<Beacon, PlanNote>) {
+    fn lead_plan(&mut self, tick: u64, act: &mut Act<PlannerMsg, PlanNote>) {
         let Some(lead) = self.lead.filter(|l| l.is_leader) else {
             self.queue.clear();
             self.awaiting = None;
@@ -235,7 +265,12 @@ impl Planner {
         if !self.queue.is_empty() || self.awaiting.is_some() {
             return;
         }
-        let settle = self.p.settle as u64;
+        let mut settle = self.p.settle as u64;
+        if self.continues() && self.plan != 0 {
+            // In flight every vehicle re-plans itself on board each `settle` ticks: the
+            // leader steps in only for vehicles that stayed stuck four times as long.
+            settle *= 4;
+        }
         let me = self.id as usize;
         let mut jobs_at: Vec<(u32, [f64; 3])> = Vec::new();
         let mut parked: Vec<(u32, [f64; 3])> = Vec::new();
@@ -370,7 +405,7 @@ pub fn split(plan: u32, vehicle: u32, route: &Route) -> Vec<RoutePart> {
 impl Behaviour for Planner {
     const KIND: &'static str = "planner";
     type Params = PlannerParams;
-    type Msg = Beacon;
+    type Msg = PlannerMsg;
     type Note = PlanNote;
     const METRICS: &'static [&'static str] = metrics::NAMES;
 
@@ -417,6 +452,13 @@ impl Behaviour for Planner {
             count: 0,
             last_tick: None,
             pos: start,
+            detours: BTreeMap::new(),
+            detour_parts: BTreeMap::new(),
+            mine: Vec::new(),
+            seq: 0,
+            cursor: 0,
+            retry_at: None,
+            search: Search::new(),
         }
     }
 
@@ -438,7 +480,12 @@ impl Behaviour for Planner {
         self.lead = Some(*leadership);
     }
 
-    fn step(&mut self, obs: &Observation, inbox: &[Heard<Beacon>], act: &mut Act<Beacon, PlanNote>) {
+    fn step(
+        &mut self,
+        obs: &Observation,
+        inbox: &[Heard<PlannerMsg>],
+        act: &mut Act<PlannerMsg, PlanNote>,
+    ) {
         let tick = obs.tick;
         self.pos = [obs.x, obs.y, obs.z];
         if self.last_tick.is_none() {
@@ -452,20 +499,33 @@ impl Behaviour for Planner {
         // A gap in ticks: this process was frozen and its route ran on without it.
         if self.last_tick.is_some_and(|t| tick > t + 1) {
             self.hover(tick, Some(HoverWhy::Late), act);
+            if self.continues() && self.plan != 0 {
+                self.retry_at = Some(tick);
+            }
         }
         self.last_tick = Some(tick);
+        // Continue mode: whether something that can block this vehicle's route changed.
+        let mut recheck = false;
         for h in inbox {
             let Some(peer) = self.peers.get_mut(h.src as usize) else {
                 continue;
             };
             peer.heard = tick;
-            peer.lost = false;
-            peer.hover_since = match (h.msg.hovering, peer.hover_since) {
-                (true, Some(s)) => Some(s),
-                (true, None) => Some(tick),
-                (false, _) => None,
-            };
-            peer.beacon = Some(h.msg);
+            if peer.lost {
+                peer.lost = false;
+                recheck = true;
+            }
+            match h.msg {
+                PlannerMsg::Beacon(b) => {
+                    peer.hover_since = match (b.hovering, peer.hover_since) {
+                        (true, Some(s)) => Some(s),
+                        (true, None) => Some(tick),
+                        (false, _) => None,
+                    };
+                    peer.beacon = Some(b);
+                }
+                PlannerMsg::Detour(d) => recheck |= self.collect_detour(h.src, d),
+            }
         }
         let lost_after = self.p.lost_after as u64;
         let mut newly_lost = false;
@@ -479,6 +539,10 @@ impl Behaviour for Planner {
                 peer.hover_since = None;
                 newly_lost = true;
             }
+            // A vehicle that has hovered `settle` ticks is an obstacle from now on.
+            if peer.hover_since.is_some_and(|s| tick == s + self.p.settle as u64) {
+                recheck = true;
+            }
             if let Some(b) = peer.beacon
                 && !peer.lost
                 && b.hovering
@@ -490,18 +554,27 @@ impl Behaviour for Planner {
                 peer_hovers = true;
             }
         }
-        if newly_lost {
-            self.hover(tick, Some(HoverWhy::Lost), act);
-        } else if peer_hovers {
-            self.hover(tick, Some(HoverWhy::Peer), act);
+        if self.continues() {
+            // The routes were planned together: fly on, and check the route against what
+            // changed (a new committed route is checked too: it may be older than a detour).
+            let before = self.plan;
+            self.take_route(tick, act);
+            recheck |= newly_lost || self.plan != before;
+            self.autonomy(tick, recheck, act);
+        } else {
+            if newly_lost {
+                self.hover(tick, Some(HoverWhy::Lost), act);
+            } else if peer_hovers {
+                self.hover(tick, Some(HoverWhy::Peer), act);
+            }
+            self.take_route(tick, act);
         }
-        self.take_route(tick, act);
 
         let t = self.now(tick);
         act.velocity = match &self.mode {
             Mode::Hover { at, .. } => self.steer(*at, [0.0; 3]),
             Mode::Arrived { at } => self.steer(*at, [0.0; 3]),
-            Mode::Fly { traj, end } => {
+            Mode::Fly { traj, end, .. } => {
                 let (target, feed) = (traj.position(t), traj.velocity(t));
                 let goal = self.goals[self.id as usize];
                 let off = (0..3).map(|a| (goal[a] - self.pos[a]).powi(2)).sum::<f64>().sqrt();
@@ -530,13 +603,21 @@ impl Behaviour for Planner {
         };
         act.send(
             BROADCAST,
-            Beacon {
+            PlannerMsg::Beacon(Beacon {
                 pos: [self.pos[0] as f32, self.pos[1] as f32, self.pos[2] as f32],
                 plan: self.plan,
                 hovering,
                 arrived,
-            },
+                detour: match self.mode {
+                    Mode::Fly {
+                        kind: RouteKind::Detour(_),
+                        ..
+                    } => self.seq,
+                    _ => 0,
+                },
+            }),
         );
+        self.announce(act);
     }
 
     fn metrics(

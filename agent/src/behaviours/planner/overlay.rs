@@ -52,6 +52,7 @@ fn role_after(id: u32, note: &PlanNote) -> Option<u8> {
         PlanNote::Hover { .. } => Some(HOVERING),
         PlanNote::Arrived => Some(ARRIVED),
         PlanNote::NoRoute { vehicle, .. } if vehicle == id => Some(NO_ROUTE),
+        PlanNote::Detour { .. } => Some(IN_FLIGHT),
         PlanNote::NoRoute { .. } | PlanNote::Planned { .. } => None,
     }
 }
@@ -92,6 +93,7 @@ fn headline(note: &PlanNote) -> Option<Headline> {
                 HoverWhy::Lost => "a vehicle went silent",
                 HoverWhy::Peer => "a vehicle of its plan hovers",
                 HoverWhy::Late => "its route committed too late",
+                HoverWhy::Blocked => "its route is blocked and no detour exists yet",
             };
             (
                 "hover",
@@ -100,6 +102,16 @@ fn headline(note: &PlanNote) -> Option<Headline> {
             )
         }
         PlanNote::Arrived => ("arrived", "at its goal".to_string(), Vec::new()),
+        PlanNote::Detour {
+            plan, seq, moves, ..
+        } => (
+            "detour",
+            format!(
+                "detour {seq} planned on board: {moves} moves (replaces {})",
+                plan_name(plan)
+            ),
+            Vec::new(),
+        ),
         PlanNote::Flying { .. } => return None,
     };
     Some(Headline { kind, text, others })

@@ -10,6 +10,21 @@ use swarmrt_planner::Cell;
 
 use crate::behaviour::Params;
 
+/// What a UAV does when its plan breaks and no leader re-plans it: its leader fell silent, no
+/// majority is reachable, a vehicle died on its route, or its route came late.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OnLeaderLoss {
+    /// Seed 002 after eq. 3: the route is built on the vehicle, "which allows switching to
+    /// autonomous mode if communication with the leader is lost". A UAV keeps flying its
+    /// committed route on time (the routes were planned together); one that must deviate
+    /// plans its own detour on board against the others' routes and announces it.
+    Continue,
+    /// Stop and hover until a leader plans everyone again (the earlier policy of this
+    /// runtime; with no majority every survivor hovers for good).
+    Hover,
+}
+
 /// Parameters of the route planner behaviour.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -44,6 +59,8 @@ pub struct PlannerParams {
     pub gain: f64,
     /// Search states expanded per route before giving up.
     pub max_expansions: u32,
+    /// What a UAV does when its plan breaks with no leader to re-plan it.
+    pub on_leader_loss: OnLeaderLoss,
 }
 
 impl Default for PlannerParams {
@@ -62,6 +79,7 @@ impl Default for PlannerParams {
             settle: 5,
             gain: 2.0,
             max_expansions: 200_000,
+            on_leader_loss: OnLeaderLoss::Continue,
         }
     }
 }
@@ -82,6 +100,7 @@ impl Params for PlannerParams {
         k("behaviour.settle", r(0.0, 1_000_000.0), "ticks", "Ticks every vehicle must have hovered before the leader plans."),
         k("behaviour.gain", r(0.0, 100.0), "1/s", "Gain pulling a vehicle back onto its route or hover point."),
         k("behaviour.max_expansions", r(1.0, 100_000_000.0), "", "Search states expanded per route before giving up."),
+        k("behaviour.on_leader_loss", Bounds::Any, "", "continue: fly the committed route on and detour on board when blocked (the paper); hover: wait for a leader's plan."),
     ];
 
     fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
