@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates every number and figure of docs/results/seed002.md (about 2 minutes on 2 cores).
+# Regenerates every number and figure of docs/results/seed002.md (about 4 minutes on 2 cores).
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
 out=docs/results/seed002
@@ -28,6 +28,11 @@ $swarm sweep configs/planner_uav3_leader_dies.toml --vary radio.loss=0,0.2,0.3 -
   --seeds 10 --jobs 2 --out $tmp/sweep_leader_dies $metrics
 sed -n '/^| radio.loss/,/^$/p' $tmp/sweep_uav3/summary.md > $out/sweep_uav3.md
 sed -n '/^| radio.loss/,/^$/p' $tmp/sweep_leader_dies/summary.md > $out/sweep_leader_dies.md
+
+# On leader loss: the paper's autonomy ("continue") against hovering for a new plan, 10 seeds
+# per scenario, 3 and 10 UAVs, as processes (about 2 minutes).
+python3 $out/autonomy.py $swarm $tmp 3 > $out/autonomy_3.md
+python3 $out/autonomy.py $swarm $tmp 10 > $out/autonomy_10.md
 
 # Planner speed, one run, every row against the paper's 30 ms.
 cargo run --release -p swarmrt-planner --example compare > $out/compare.txt
