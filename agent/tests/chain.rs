@@ -5,7 +5,7 @@
 use swarmrt_agent::behaviour::{Act, Behaviour};
 use swarmrt_agent::behaviours::chain::{
     Chain, ChainNote, ChainParams, Layer, Link, Reaction, Sides, Target, Wheels, adapt,
-    clamp_angle, connector_angle, line_blocked, rotate_towards, subsume,
+    clamp_angle, connector_angle, line_blocked, rotate_towards, segment_collision, shake, subsume,
 };
 use swarmrt_agent::inbox::Heard;
 use swarmrt_protocol::{Neighbour, Observation};
@@ -85,6 +85,62 @@ fn rotate_heads_for_the_newest_point_of_the_master_trail_in_clear_sight() {
         rotate_towards(pose, hidden.iter().copied(), &hits, 0.13),
         None
     );
+}
+
+#[test]
+fn the_collision_point_nearest_the_master_and_appendix_a_shake() {
+    // A wall of hits along x = 0.5, y in [-0.3, 0.3]: the rod from the master at (1, 0) to the
+    // slave at the origin crosses it at (0.5, 0) (nearest the master of the hits on it).
+    let wall: Vec<(f64, f64)> = (-6..=6).map(|k| (0.5, k as f64 * 0.05)).collect();
+    let m = (1.0, 0.0);
+    let hit = segment_collision(&wall, m, (0.0, 0.0), 0.05, 0.0).unwrap();
+    assert!(close(hit, (0.5, 0.0)), "{hit:?}");
+    // The master's own body (hits within `ignore` of it) is no collision.
+    assert_eq!(
+        segment_collision(&wall, (0.55, 0.0), (0.0, 0.0), 0.05, 0.2),
+        None
+    );
+    assert_eq!(segment_collision(&wall, m, (0.0, 1.0), 0.05, 0.0), None);
+    // Shaking: every accepted point has a clear guiding line from the master and a clear
+    // straight path from the slave; the draws decide which.
+    let mut x: u64 = 7;
+    let mut draw = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut found = Vec::new();
+    for _ in 0..20 {
+        if let Some(s) = shake(m, &wall, 0.05, 0.0, 0.45, 64, &mut draw) {
+            assert_eq!(segment_collision(&wall, m, s, 0.05, 0.0), None, "{s:?}");
+            assert!(!line_blocked(&wall, s, 0.05, 0.0), "{s:?}");
+            found.push(s);
+        }
+    }
+    assert!(found.len() >= 10, "{found:?}");
+    // Beyond the wall's ends: the shake moved the point off the line through the wall.
+    assert!(found.iter().all(|s| s.1.abs() > 0.3), "{found:?}");
+    // Same draws, same points: the shake is as deterministic as its stream.
+    let replay = |seed: u64| {
+        let mut x = seed;
+        let mut draw = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        shake(m, &wall, 0.05, 0.0, 0.45, 64, &mut draw)
+    };
+    assert_eq!(replay(99), replay(99));
+    // A slave boxed in on every side finds nothing within its tries: trapped.
+    let boxed: Vec<(f64, f64)> = (0..72)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / 72.0;
+            (0.2 * a.cos(), 0.2 * a.sin())
+        })
+        .collect();
+    assert_eq!(shake(m, &boxed, 0.05, 0.0, 0.45, 64, &mut draw), None);
 }
 
 fn params() -> ChainParams {

@@ -151,3 +151,37 @@ fn both_modes_write_the_same_bytes_with_positions_and_vetoes_over_a_lossy_radio(
     );
     assert!(m["chain"]["vetoes"].as_u64().unwrap() >= 1, "{m}");
 }
+
+#[test]
+fn appendix_a_shake_threads_the_corridor_and_replays_byte_for_byte() {
+    let tmp = tempfile::tempdir().unwrap();
+    let shake = ["--set", "behaviour.rotate=\"shake\""];
+    // The shake draws from the run seed's stream: both modes, the same bytes, with loss.
+    let lossy = tmp.path().join("lossy");
+    std::fs::create_dir_all(&lossy).unwrap();
+    assert_modes_agree_with_loss(
+        &lossy,
+        "configs/chain_corridor.toml",
+        1200,
+        &shake,
+        &["trajectory.csv", "events.jsonl"],
+    );
+    // It is not the trail: the same run with `rotate = "trail"` moves otherwise.
+    let trail = tmp.path().join("trail");
+    let mut args = vec!["--ticks", "1200", "--in-process"];
+    args.extend_from_slice(&swarmrt_tests::LOSSY_RADIO);
+    run_config("configs/chain_corridor.toml", &trail, &args);
+    assert!(
+        bytes(&trail, "trajectory.csv") != bytes(&lossy.join("in-process"), "trajectory.csv"),
+        "rotate = \"shake\" changed nothing"
+    );
+    // With a clean radio the whole chain threads the corridor without a collision.
+    let clean = tmp.path().join("clean");
+    let mut args = vec!["--in-process"];
+    args.extend_from_slice(&shake);
+    let m = run_config("configs/chain_corridor.toml", &clean, &args);
+    let c = &m["chain"];
+    assert_eq!(c["collisions"], 0, "{c}");
+    assert_eq!(c["reached"], 16, "{c}");
+    assert_eq!(c["tail_reached"], true, "{c}");
+}

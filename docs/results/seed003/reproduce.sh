@@ -50,6 +50,9 @@ killed=$(run killed configs/chain_corridor.toml --set 'faults.kill=[{tick=600,ro
 cp $killed/trajectory.png $out/killed.png
 python3 $out/table.py killed=$killed > $out/killed.md
 
+# Appendix A's random shake against the trail (about 2 minutes).
+python3 $out/rotate.py $swarm $tmp/rotate > $out/rotate.md
+
 # Beyond the paper: loss and delay.
 bash $out/sweep.sh $tmp/sweep
 sed -n '/^| radio.loss/,/^$/p' $tmp/sweep/summary.md > $out/sweep.md

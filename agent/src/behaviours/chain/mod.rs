@@ -9,7 +9,8 @@
 //! beyond `rod_max`, Push inside `rod_min`, nothing in between (Resize), on the guiding line,
 //! with the connector angle at the master kept in its limits; when its own lidar says the
 //! guiding line crosses an obstacle, it rotates the rod by heading for the newest point of
-//! its master's trail it can reach in a straight line (Push-Pull-Rotate, Fig. 5).
+//! its master's trail it can reach in a straight line (Push-Pull-Rotate, Fig. 5), or, with
+//! `behaviour.rotate = "shake"`, by Appendix A's random shake of the colliding point.
 //!
 //! **How a master's motion reaches its slave.** The paper propagates by recursion in one
 //! process, all in one step. Here each robot is a process that acts once per tick on what it
@@ -46,11 +47,14 @@ mod rods;
 pub use head::{Layer, Sides, Target, Wheels, sides, subsume, unicycle};
 pub use messages::{ChainNote, Link, VetoWhy};
 pub use metrics::{FirstMoves, first_moves};
-pub use params::{ChainParams, MasterFrom};
+pub use params::{ChainParams, MasterFrom, Rotate};
 pub use rods::{
-    P, Reaction, adapt, clamp_angle, connector_angle, line_blocked, rotate_towards, steer,
-    to_robot_frame,
+    P, Reaction, adapt, clamp_angle, connector_angle, line_blocked, rotate_towards,
+    segment_collision, shake, steer, to_robot_frame,
 };
+
+use rand::Rng as _;
+use swarmrt_scenario::rng::{self, Rng};
 
 use std::collections::VecDeque;
 
@@ -123,6 +127,8 @@ pub struct Chain {
     replan: Option<f64>,
     /// The initiator: ticks of in-place turning left, and the turn rate.
     turning: (u32, f64),
+    /// Draws of Appendix A's shake (`rotate = "shake"`; untouched otherwise).
+    rng: Rng,
 }
 
 impl Chain {
@@ -177,7 +183,27 @@ impl Chain {
         let clearance = self.radius + self.p.line_clearance;
         let ignore = 2.0 * self.radius + self.p.line_clearance;
         let me = (obs.x, obs.y);
-        if line_blocked(hits, to_robot_frame(pose, m), clearance, ignore) {
+        let m_here = to_robot_frame(pose, m);
+        if self.p.rotate == Rotate::Shake && line_blocked(hits, m_here, clearance, ignore) {
+            let rng = &mut self.rng;
+            let s = shake(
+                m_here,
+                hits,
+                clearance,
+                ignore,
+                self.p.rod_max,
+                self.p.shake_tries,
+                || rng.random::<f64>(),
+            )?;
+            // Back to the world frame; Push or Pull along the new guiding line when the
+            // slave can reach that point straight, else the shaken point itself.
+            let (c, si) = (pose.2.cos(), pose.2.sin());
+            let s = (pose.0 + c * s.0 - si * s.1, pose.1 + si * s.0 + c * s.1);
+            let (_, target) = adapt(m, s, self.p.rod_min, self.p.rod_max, lead);
+            let clear = !line_blocked(hits, to_robot_frame(pose, target), clearance, 0.0);
+            return Some(if clear { target } else { s });
+        }
+        if line_blocked(hits, m_here, clearance, ignore) {
             // Only the trail ahead of it counts (the points after the one nearest to it): the
             // newest in a straight line with the full clearance, else with a hair more than
             // the body (where the master itself squeezed by), else simply the next one (the
@@ -387,6 +413,7 @@ impl Behaviour for Chain {
             vetoing: 0,
             replan: None,
             turning: (0, 0.0),
+            rng: rng::stream(cfg.scenario.seed, "chain-shake", id as u64),
         }
     }
 

@@ -25,6 +25,18 @@ pub enum MasterFrom {
     Both,
 }
 
+/// How a slave whose guiding line is blocked rotates its rod (Push-Pull-Rotate, Fig. 5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Rotate {
+    /// Towards the newest point of its master's trail it can reach in a straight line: where
+    /// the master has been is collision free by construction, and no randomness is needed.
+    Trail,
+    /// Appendix A's `ROTATE`: shake the colliding position at random (from the run seed's
+    /// stream) until the guiding line from the master is collision free.
+    Shake,
+}
+
 /// Parameters of the chain behaviour.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -83,6 +95,10 @@ pub struct ChainParams {
     pub veto_hold: u32,
     /// Turn gain of a robot steering to its target point (rad/s per radian).
     pub turn_gain: f64,
+    /// How a blocked rod rotates: the master's trail, or Appendix A's random shake.
+    pub rotate: Rotate,
+    /// Shakes a slave tries per tick before it counts the tick as trapped (`rotate = "shake"`).
+    pub shake_tries: u32,
 }
 
 impl Default for ChainParams {
@@ -110,6 +126,8 @@ impl Default for ChainParams {
             trapped_ticks: 20,
             veto_hold: 3,
             turn_gain: 3.0,
+            rotate: Rotate::Trail,
+            shake_tries: 64,
         }
     }
 }
@@ -141,6 +159,8 @@ impl Params for ChainParams {
         k("behaviour.trapped_ticks", r(1.0, 1_000_000.0), "ticks", "Ticks a slave may find no clear guiding line before it vetoes."),
         k("behaviour.veto_hold", r(1.0, 1_000_000.0), "ticks", "Ticks a heard veto keeps holding (rides over lost frames)."),
         k("behaviour.turn_gain", r(0.0, 1e3), "1/s", "Turn gain of a robot steering to its target point (rad/s per radian)."),
+        k("behaviour.rotate", Bounds::Any, "", "How a blocked rod rotates: towards the master's trail, or Appendix A's random shake of the colliding point."),
+        k("behaviour.shake_tries", r(1.0, 100_000.0), "", "Shakes per tick before the tick counts as trapped (rotate = \"shake\")."),
     ];
 
     fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
@@ -228,6 +248,7 @@ impl Params for ChainParams {
         check_u(keys, "behaviour.trapped_ticks", self.trapped_ticks as u64)?;
         check_u(keys, "behaviour.veto_hold", self.veto_hold as u64)?;
         check_f(keys, "behaviour.turn_gain", self.turn_gain)?;
+        check_u(keys, "behaviour.shake_tries", self.shake_tries as u64)?;
         Ok(())
     }
 }

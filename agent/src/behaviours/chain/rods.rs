@@ -96,9 +96,10 @@ pub fn line_blocked(hits: &[P], to: P, clearance: f64, ignore: f64) -> bool {
 /// guiding line defined by the new master position and the slave is collision free". Of the
 /// master's remembered positions `trail` (oldest first, world frame), the newest one the
 /// slave can reach in a straight, collision-free line, seen from `pose` (x, y, heading);
-/// `None` when none is (the slave is trapped). Appendix A's random "shaking" of the
-/// colliding point is replaced by this search over where the master has actually been,
-/// which is collision free by construction and needs no randomness. No hit is ignored near a
+/// `None` when none is (the slave is trapped). In place of Appendix A's random "shaking"
+/// of the colliding point ([`shake`], `behaviour.rotate = "shake"`), this searches where
+/// the master has actually been, which is collision free by construction and needs no
+/// randomness. No hit is ignored near a
 /// trail point: nobody stands there to explain it away.
 pub fn rotate_towards(
     pose: (f64, f64, f64),
@@ -109,6 +110,63 @@ pub fn rotate_towards(
     trail
         .rev()
         .find(|&c| !line_blocked(hits, to_robot_frame(pose, c), clearance, 0.0))
+}
+
+/// The point of the segment `a`-`b` nearest `a` at which it passes within `clearance` of a
+/// hit (the rod's "obstacle collision point that is closest to the master" when `a` is the
+/// master); hits within `ignore` of `a` are the body standing there. `None`: clear.
+pub fn segment_collision(hits: &[P], a: P, b: P, clearance: f64, ignore: f64) -> Option<P> {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let d = dx.hypot(dy);
+    if d < 1e-9 {
+        return None;
+    }
+    let u = (dx / d, dy / d);
+    hits.iter()
+        .filter(|h| (h.0 - a.0).hypot(h.1 - a.1) >= ignore)
+        .filter_map(|h| {
+            let (hx, hy) = (h.0 - a.0, h.1 - a.1);
+            let t = hx * u.0 + hy * u.1;
+            let perp = (hx - t * u.0).hypot(hy - t * u.1);
+            (t > 0.0 && t < d && perp < clearance).then_some(t)
+        })
+        .min_by(f64::total_cmp)
+        .map(|t| (a.0 + t * u.0, a.1 + t * u.1))
+}
+
+/// Appendix A's `ROTATE`, in the slave's frame (the slave at the origin, `m` its master,
+/// `hits` its lidar): while the guiding line from the master through `slave_pos` (first the
+/// slave itself) collides, `slave_pos := Sign(slave_pos - pos) * Random + pos` with `pos` the
+/// collision point closest to the master, `Random` uniform in `[0, reach)` per axis (`draw`
+/// gives `[0, 1)`). Returns the first `slave_pos` whose guiding line is clear and whose own
+/// straight path from the slave to it is clear too (so the slave can move there), after at
+/// most `tries` shakes; `None` when none is. The paper leaves `Random`'s scale open: `reach`
+/// is one rod.
+pub fn shake(
+    m: P,
+    hits: &[P],
+    clearance: f64,
+    ignore: f64,
+    reach: f64,
+    tries: u32,
+    mut draw: impl FnMut() -> f64,
+) -> Option<P> {
+    let mut slave_pos = (0.0, 0.0);
+    for _ in 0..tries {
+        let Some(pos) = segment_collision(hits, m, slave_pos, clearance, ignore) else {
+            if !line_blocked(hits, slave_pos, clearance, 0.0) {
+                return Some(slave_pos);
+            }
+            // A clear guiding line the slave cannot reach: shake from where it stands.
+            slave_pos = (0.0, 0.0);
+            continue;
+        };
+        let sign = |v: f64| if v < 0.0 { -1.0 } else { 1.0 };
+        let sx = sign(slave_pos.0 - pos.0) * draw() * reach;
+        let sy = sign(slave_pos.1 - pos.1) * draw() * reach;
+        slave_pos = (pos.0 + sx, pos.1 + sy);
+    }
+    None
 }
 
 /// `p` (world frame) in the frame of a robot at `pose` (x, y, heading).
