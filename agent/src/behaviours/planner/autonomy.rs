@@ -91,7 +91,8 @@ impl Planner {
     }
 
     /// Whether the route this vehicle flies is blocked from the current slot on: by a silent
-    /// vehicle where it was last heard, by a stuck one, or by a route it must give way to.
+    /// vehicle where it was last heard, by a stuck or arrived one where it is, or by a route
+    /// it must give way to.
     pub(super) fn blocked(&self, tick: u64) -> bool {
         let Mode::Fly { route, kind, .. } = &self.mode else {
             return false;
@@ -103,8 +104,13 @@ impl Planner {
             if v == self.id as usize {
                 continue;
             }
-            if self.peers[v].lost || self.stuck(v, tick) {
+            let arrived = self.peers[v].beacon.is_some_and(|b| b.arrived);
+            if self.peers[v].lost || self.stuck(v, tick) || arrived {
+                // An arrived vehicle is parked at its goal whatever route it flew there.
                 res.add_dead(v as u32, self.last_cell(v));
+            }
+            if arrived {
+                continue;
             }
             if let Some((theirs, r)) = self.route_of(v as u32)
                 && self.gives_way(*kind, v as u32, theirs)
