@@ -1,7 +1,7 @@
 //! The agent core: decodes the radio inbox, runs consensus and the behaviour, fills the
 //! command. Pure: no I/O, no clock.
 
-use swarmrt_protocol::{BROADCAST, Command, Observation, RobotState};
+use swarmrt_protocol::{BROADCAST, Command, CommandKind, Frame, Observation, RobotState};
 use swarmrt_scenario::Config;
 
 use crate::consensus::Consensus;
@@ -18,6 +18,8 @@ pub struct Agent {
     consensus: Option<Consensus>,
     heard: Vec<Heard<RadioMsg>>,
     consensus_inbox: Vec<Heard<ConsensusMsg>>,
+    /// This tick's motion as last decided (by `step` or a reaction), for the next reaction.
+    decided: Command,
 }
 
 impl Agent {
@@ -51,6 +53,7 @@ impl Agent {
             consensus,
             heard: Vec::new(),
             consensus_inbox: Vec::new(),
+            decided: Command::act(id, 0),
         }
     }
 
@@ -71,9 +74,41 @@ impl Agent {
 
     /// Decides this tick's command from this tick's observation.
     pub fn step(&mut self, obs: &Observation) -> Command {
+        let cmd = self.decide(obs);
+        self.decided = cmd;
+        cmd
+    }
+
+    /// Reacts to a propagation round of the tick of `obs` (`radio.rounds`): `frames` reached
+    /// this robot within the tick. The React command carries the motion as the behaviour
+    /// now wants it (unchanged if it does not react) and the frames it passes on.
+    pub fn react(&mut self, obs: &Observation, frames: &[Frame]) -> Command {
+        self.decode(frames);
+        let mut cmd = Command::act(self.id, obs.tick);
+        cmd.kind = CommandKind::React as u32;
+        if RobotState::from_u8(obs.state) != Some(RobotState::Active) {
+            return cmd;
+        }
+        let d = &self.decided;
+        (cmd.v, cmd.omega, cmd.vx, cmd.vy, cmd.vz) = (d.v, d.omega, d.vx, d.vy, d.vz);
+        cmd.lidar_on = d.lidar_on;
+        let mut notes: Vec<Note> = Vec::new();
+        self.brain.react(obs, &mut self.heard, &mut cmd, &mut notes);
+        // A reaction's frames all travel within the tick.
+        cmd.in_tick = cmd.outbox_len;
+        let _ = cmd.set_notes(&notes);
+        let d = &mut self.decided;
+        (d.v, d.omega, d.vx, d.vy, d.vz) = (cmd.v, cmd.omega, cmd.vx, cmd.vy, cmd.vz);
+        d.lidar_on = cmd.lidar_on;
+        cmd
+    }
+
+    /// Sorts the frames meant for this robot into behaviour and consensus messages; counts
+    /// the ones that do not decode.
+    fn decode(&mut self, frames: &[Frame]) {
         self.heard.clear();
         self.consensus_inbox.clear();
-        for f in obs.inbox() {
+        for f in frames {
             if f.dst != BROADCAST && f.dst != self.id {
                 // Not for us (the world routes unicast only to its addressee, but answers
                 // such as a granted vote must never be taken for one's own).
@@ -101,6 +136,10 @@ impl Agent {
                 }),
             }
         }
+    }
+
+    fn decide(&mut self, obs: &Observation) -> Command {
+        self.decode(obs.inbox());
         let mut cmd = Command::act(self.id, obs.tick);
         if RobotState::from_u8(obs.state) != Some(RobotState::Active) {
             // Knocked down or dead: nothing to decide.

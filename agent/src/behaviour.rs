@@ -47,6 +47,8 @@ pub struct Act<M, N> {
     /// `omega` are for ground robots).
     pub velocity: [f64; 3],
     frames: Vec<(u32, M)>,
+    /// Frames that travel within the tick (`radio.rounds`), sent before `frames`.
+    in_tick: Vec<(u32, M)>,
     notes: Vec<N>,
     proposals: Vec<Decision>,
 }
@@ -59,6 +61,7 @@ impl<M, N> Default for Act<M, N> {
             lidar_on: false,
             velocity: [0.0; 3],
             frames: Vec::new(),
+            in_tick: Vec::new(),
             notes: Vec::new(),
             proposals: Vec::new(),
         }
@@ -70,6 +73,14 @@ impl<M, N> Act<M, N> {
     /// outbox are dropped, as the radio would.
     pub fn send(&mut self, dst: u32, msg: M) {
         self.frames.push((dst, msg));
+    }
+
+    /// With `radio.rounds` > 0, sends `msg` to `dst` within this tick: the receiver is woken
+    /// to [`Behaviour::react`] before the world steps. Without rounds it is an ordinary frame
+    /// (arriving with the next observation). In a reaction every frame travels within the
+    /// tick, so there [`Act::send`] does the same.
+    pub fn send_in_tick(&mut self, dst: u32, msg: M) {
+        self.in_tick.push((dst, msg));
     }
 
     /// Reports `note` in the run record (`events.jsonl`).
@@ -91,6 +102,7 @@ impl<M, N> Act<M, N> {
         self.lidar_on = false;
         self.velocity = [0.0; 3];
         self.frames.clear();
+        self.in_tick.clear();
         self.notes.clear();
         self.proposals.clear();
     }
@@ -100,9 +112,13 @@ impl<M, N> Act<M, N> {
         &self.proposals
     }
 
-    /// The messages to send, in order, and the notes.
-    pub fn drain(&mut self) -> (std::vec::Drain<'_, (u32, M)>, std::vec::Drain<'_, N>) {
-        (self.frames.drain(..), self.notes.drain(..))
+    /// The messages to send, in order (those within the tick first), how many of them
+    /// travel within the tick, and the notes.
+    pub fn drain(&mut self) -> (Vec<(u32, M)>, usize, std::vec::Drain<'_, N>) {
+        let in_tick = self.in_tick.len();
+        let mut frames = std::mem::take(&mut self.in_tick);
+        frames.append(&mut self.frames);
+        (frames, in_tick, self.notes.drain(..))
     }
 }
 
@@ -129,6 +145,19 @@ pub trait Behaviour: Send + Sized + 'static {
         inbox: &[Heard<Self::Msg>],
         act: &mut Act<Self::Msg, Self::Note>,
     );
+
+    /// A propagation round within this tick (`radio.rounds` > 0): `round` holds the frames
+    /// of this behaviour's kind that reached it in the round (sent with
+    /// [`Act::send_in_tick`] or from another reaction). `act` starts as this tick's decision
+    /// so far (its motion, no frames): change the motion, and send frames to pass the change
+    /// on within the tick. The default reacts to nothing.
+    fn react(
+        &mut self,
+        _obs: &Observation,
+        _round: &[Heard<Self::Msg>],
+        _act: &mut Act<Self::Msg, Self::Note>,
+    ) {
+    }
 
     /// Acts on a swarm decision the consensus layer committed and applied. Called before
     /// `step` in the tick it was applied; behaviours that have no use for it ignore it.

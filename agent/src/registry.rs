@@ -81,6 +81,16 @@ pub trait Brain: Send {
     /// robot knows it (Raft scenarios); the behaviour's proposals for the log go to
     /// `proposals`.
     fn step(&mut self, tick: Tick<'_>, cmd: &mut Command, out: &mut Out<'_>);
+
+    /// A propagation round within the tick of `obs`: `cmd` comes with the tick's motion so
+    /// far; the behaviour may change it and send frames (all within the tick).
+    fn react(
+        &mut self,
+        obs: &Observation,
+        heard: &mut Vec<Heard<RadioMsg>>,
+        cmd: &mut Command,
+        notes: &mut Vec<Note>,
+    );
 }
 
 /// What a [`Brain`] is given for one tick.
@@ -257,17 +267,50 @@ impl<B: Enveloped> Brain for Driver<B> {
         }));
         self.act.reset();
         self.behaviour.step(obs, &self.inbox, &mut self.act);
+        out.proposals.extend_from_slice(self.act.proposals());
+        self.fill(cmd, out.notes);
+    }
+
+    fn react(
+        &mut self,
+        obs: &Observation,
+        heard: &mut Vec<Heard<RadioMsg>>,
+        cmd: &mut Command,
+        notes: &mut Vec<Note>,
+    ) {
+        self.inbox.clear();
+        self.inbox.extend(heard.drain(..).filter_map(|h| {
+            Some(Heard {
+                src: h.src,
+                sent_tick: h.sent_tick,
+                msg: B::unwrap_msg(h.msg)?,
+            })
+        }));
+        self.act.reset();
+        self.act.v = cmd.v;
+        self.act.omega = cmd.omega;
+        self.act.velocity = [cmd.vx, cmd.vy, cmd.vz];
+        self.act.lidar_on = cmd.lidar_on != 0;
+        self.behaviour.react(obs, &self.inbox, &mut self.act);
+        self.fill(cmd, notes);
+    }
+}
+
+impl<B: Enveloped> Driver<B> {
+    /// Writes the act's motion, frames (those within the tick first) and notes into `cmd`.
+    fn fill(&mut self, cmd: &mut Command, notes: &mut Vec<Note>) {
         cmd.v = self.act.v;
         cmd.omega = self.act.omega;
         [cmd.vx, cmd.vy, cmd.vz] = self.act.velocity;
         cmd.lidar_on = self.act.lidar_on as u8;
-        out.proposals.extend_from_slice(self.act.proposals());
-        let (frames, mine) = self.act.drain();
-        for (dst, msg) in frames {
+        let (frames, in_tick, mine) = self.act.drain();
+        for (k, (dst, msg)) in frames.into_iter().enumerate() {
             // A full outbox drops the frame, as the radio would.
-            let _ = cmd.push_frame(dst, &B::wrap_msg(msg));
+            if cmd.push_frame(dst, &B::wrap_msg(msg)).is_ok() && k < in_tick {
+                cmd.in_tick += 1;
+            }
         }
-        out.notes.extend(mine.map(B::wrap_note));
+        notes.extend(mine.map(B::wrap_note));
     }
 }
 

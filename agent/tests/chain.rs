@@ -268,8 +268,7 @@ fn link(x: f64, y: f64, veto: u16) -> Link {
 }
 
 fn frames(act: &mut Act<Link, ChainNote>) -> (Vec<(u32, Link)>, Vec<ChainNote>) {
-    let (f, n) = act.drain();
-    let f: Vec<_> = f.collect();
+    let (f, _, n) = act.drain();
     (f, n.collect())
 }
 

@@ -242,8 +242,7 @@ fn only_the_own_flocks_messages_count_and_they_expire_after_time_out() {
     let at = mates[0].1.position.expect("range-and-bearing saw it");
     v_close(at, (0.0, 0.12), 1e-12);
     // It broadcasts its own flock and heading.
-    let (frames, _) = act.drain();
-    let frames: Vec<_> = frames.collect();
+    let (frames, _, _) = act.drain();
     assert_eq!(frames.len(), 1);
     assert!(matches!(frames[0].1, FlockMsg::Heading { flock: 0, .. }));
     for tick in 1..=10 {

@@ -507,6 +507,7 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
         run.observe();
         let t1 = Instant::now();
         run.think();
+        run.propagate();
         let t2 = Instant::now();
         run.advance();
         run.drain_events();

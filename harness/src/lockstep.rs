@@ -132,15 +132,39 @@ impl Lockstep {
         });
     }
 
-    /// The third phase: the world steps with the answers.
+    /// The third phase (`radio.rounds` > 0 only): the tick's propagation rounds. Each round
+    /// the world routes the frames sent within the tick, and every robot woken with some
+    /// reacts, in ascending id as the world process applies them; a no-op without rounds.
+    pub fn propagate(&mut self) {
+        if !self.world.has_rounds() {
+            return;
+        }
+        self.world.start_rounds(&self.commands);
+        loop {
+            let round = self.world.next_round();
+            if round.is_empty() {
+                return;
+            }
+            for inbox in &round {
+                let r = inbox.robot as usize;
+                let answer = self.agents[r].react(&self.obs[r], inbox.inbox());
+                self.world
+                    .react(inbox.robot, Some(&answer), &mut self.commands);
+            }
+        }
+    }
+
+    /// The last phase: the world steps with the answers.
     pub fn advance(&mut self) {
         self.world.step(&self.commands);
     }
 
-    /// One whole tick: [`Lockstep::observe`], [`Lockstep::think`], [`Lockstep::advance`].
+    /// One whole tick: [`Lockstep::observe`], [`Lockstep::think`], [`Lockstep::propagate`],
+    /// [`Lockstep::advance`].
     pub fn step(&mut self) {
         self.observe();
         self.think();
+        self.propagate();
         self.advance();
     }
 

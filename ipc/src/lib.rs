@@ -22,6 +22,7 @@ use swarmrt_protocol::{Command, Observation, ObservationHeader};
 
 pub mod cleanup;
 pub mod lines;
+pub mod rounds;
 
 /// Shortcut for the iceoryx2 service flavour every process uses.
 pub type Svc = ipc::Service;

@@ -165,7 +165,7 @@ pub fn messages() -> Vec<Struct> {
         }),
         message!(Command, "A robot's answer to one observation (Hello first, then one Act per tick).", {
             version, robot, tick, kind, pid, v, omega, vx, vy, vz, lidar_on, outbox_len,
-            outbox, report_len, report
+            in_tick, outbox, report_len, report
         }),
     ]
 }
@@ -223,6 +223,11 @@ pub fn constants() -> Vec<(&'static str, u64, &'static str)> {
             "KIND_ACT",
             CommandKind::Act as u64,
             "Command kind: the decision for `tick`.",
+        ),
+        (
+            "KIND_REACT",
+            CommandKind::React as u64,
+            "Command kind: a reaction within `tick` to a propagation round (built-in robots only so far).",
         ),
         (
             "STATE_ACTIVE",

@@ -8,7 +8,7 @@ use iceoryx2_bb_derive_macros::ZeroCopySend;
 use iceoryx2_bb_elementary_traits::zero_copy_send::ZeroCopySend;
 
 /// Bumped whenever the layout or meaning of a message changes.
-pub const PROTOCOL_VERSION: u32 = 4;
+pub const PROTOCOL_VERSION: u32 = 5;
 /// Largest radio payload in bytes; larger frames are refused by [`Command::push_frame`].
 pub const MAX_PAYLOAD: usize = 128;
 /// Frames one robot may put into one [`Command`]; the radio capacity `K` is at most this.
@@ -267,6 +267,49 @@ pub struct ObservationHeader {
     pub tick: u64,
 }
 
+/// Header of a propagation round's sample (`radio.rounds`): which round of which tick.
+#[derive(Debug, Clone, Copy, PartialEq, Default, ZeroCopySend)]
+#[type_name("swarmrt::RoundHeader")]
+#[repr(C)]
+pub struct RoundHeader {
+    /// Must equal [`PROTOCOL_VERSION`].
+    pub version: u32,
+    /// The round, from 1 (round 0 is the tick's observation itself).
+    pub round: u32,
+    /// The tick the round belongs to.
+    pub tick: u64,
+}
+
+/// One woken robot's frames in a propagation round. A round's sample holds one per robot
+/// woken in it, in ascending robot order; a robot not in it has nothing to react to.
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("swarmrt::RoundInbox")]
+#[repr(C)]
+pub struct RoundInbox {
+    /// The woken robot.
+    pub robot: u32,
+    /// Number of valid entries in `inbox`.
+    pub inbox_len: u16,
+    /// The frames that reached it in this round, in delivery order.
+    pub inbox: [Frame; MAX_INBOX],
+}
+
+impl RoundInbox {
+    /// An empty inbox for `robot`.
+    pub fn empty(robot: u32) -> RoundInbox {
+        RoundInbox {
+            robot,
+            inbox_len: 0,
+            inbox: [Frame::EMPTY; MAX_INBOX],
+        }
+    }
+
+    /// Valid frames (clamped against a malformed length).
+    pub fn inbox(&self) -> &[Frame] {
+        &self.inbox[..(self.inbox_len as usize).min(MAX_INBOX)]
+    }
+}
+
 /// What a [`Command`] is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u32)]
@@ -275,6 +318,10 @@ pub enum CommandKind {
     Hello = 1,
     /// The robot's decision for `tick`.
     Act = 2,
+    /// The robot's reaction, within `tick`, to the frames of a propagation round
+    /// (`radio.rounds`): its motion replaces the tick's decision, its frames travel on in
+    /// the next round.
+    React = 3,
 }
 
 impl CommandKind {
@@ -283,6 +330,7 @@ impl CommandKind {
         match v {
             1 => Some(CommandKind::Hello),
             2 => Some(CommandKind::Act),
+            3 => Some(CommandKind::React),
             _ => None,
         }
     }
@@ -318,6 +366,10 @@ pub struct Command {
     pub lidar_on: u8,
     /// Number of valid frames in `outbox`.
     pub outbox_len: u16,
+    /// With `radio.rounds` > 0, the first `in_tick` frames of an Act's outbox travel within
+    /// this tick (their receivers react before the world steps) instead of arriving with the
+    /// next observation; ignored without rounds. A React's frames all travel within the tick.
+    pub in_tick: u16,
     /// Frames to send this tick; `src` and `sent_tick` are overwritten by the world.
     pub outbox: [Frame; MAX_OUTBOX],
     /// Number of valid bytes in `report`.
@@ -353,6 +405,7 @@ impl Command {
             vz: 0.0,
             lidar_on: 0,
             outbox_len: 0,
+            in_tick: 0,
             outbox: [Frame::EMPTY; MAX_OUTBOX],
             report_len: 0,
             report: [0; MAX_REPORT],

@@ -106,6 +106,17 @@ impl RunServices {
         format!("swarmrt/{}/commands", self.run_id)
     }
 
+    /// World -> woken robots: one sample per propagation round (`radio.rounds`).
+    pub fn rounds(&self) -> String {
+        format!("swarmrt/{}/rounds", self.run_id)
+    }
+
+    /// World -> robot `id`: its own wake-up, with `radio.rounds` (the tick's and the rounds
+    /// it is woken in), so a round wakes only the robots it has frames for.
+    pub fn robot_wake(&self, id: u32) -> String {
+        format!("swarmrt/{}/wake/{id}", self.run_id)
+    }
+
     /// The iceoryx2 root directory of this run.
     pub fn ipc_root(&self) -> PathBuf {
         ipc_root_of(&self.run_id)

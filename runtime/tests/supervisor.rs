@@ -328,6 +328,10 @@ fn command(robot: u32, kind: CommandKind) -> Command {
     match kind {
         CommandKind::Hello => Command::hello(robot, 1),
         CommandKind::Act => Command::act(robot, 0),
+        CommandKind::React => Command {
+            kind: CommandKind::React as u32,
+            ..Command::act(robot, 0)
+        },
     }
 }
 

@@ -489,6 +489,16 @@ pub struct RadioConfig {
     pub capacity: u32,
     /// When true, obstacles between sender and receiver block a frame.
     pub line_of_sight: bool,
+    /// Most propagation rounds inside one tick (0: none, the default). A robot may mark
+    /// frames to travel within the tick; their receivers are woken to react before the world
+    /// steps, round after round, until no such frame is in flight or this cap is reached
+    /// (seed 003's Appendix A: a master's motion passes along the whole chain in one step).
+    #[serde(skip_serializing_if = "is_zero_u32")]
+    pub rounds: u32,
+}
+
+fn is_zero_u32(v: &u32) -> bool {
+    *v == 0
 }
 
 impl Default for RadioConfig {
@@ -505,6 +515,7 @@ impl Default for RadioConfig {
             jitter_ticks: 0,
             capacity: 4,
             line_of_sight: false,
+            rounds: 0,
         }
     }
 }

@@ -253,6 +253,7 @@ pub const KEYS: &[Key] = &[
     k("radio.jitter_ticks", r(0.0, 10_000.0), "ticks", "Uniform extra delay per copy in `0..=jitter_ticks` (reorders frames)."),
     k("radio.capacity", r(1.0, MAX_OUTBOX as f64), "frames", "Most frames one robot may send per tick; more are dropped."),
     k("radio.line_of_sight", Bounds::Any, "", "Obstacles between sender and receiver block a frame."),
+    k("radio.rounds", r(0.0, 10_000.0), "rounds", "Most in-tick propagation rounds: frames a robot marks travel within the tick and wake their receivers to react before the world steps (0: none). Needs delay_ticks = jitter_ticks = 0 and the built-in robot.").absent("0"),
     // [behaviour]
     k("behaviour.kind", Bounds::Rule("a behaviour below"), "", "The behaviour every robot runs; its parameters are the other `[behaviour]` keys."),
     // [faults]
@@ -373,6 +374,7 @@ delay_ticks = 0
 jitter_ticks = 0
 capacity = 4
 line_of_sight = true
+rounds = 0
 
 [behaviour]
 kind = "goto"

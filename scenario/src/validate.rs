@@ -224,6 +224,24 @@ impl Config {
         u("radio.delay_ticks", q.delay_ticks as u64)?;
         u("radio.jitter_ticks", q.jitter_ticks as u64)?;
         u("radio.capacity", q.capacity as u64)?;
+        u("radio.rounds", q.rounds as u64)?;
+        if q.rounds > 0 {
+            check(
+                q.delay_ticks == 0 && q.jitter_ticks == 0,
+                "radio.rounds",
+                &format!(
+                    "0 while radio.delay_ticks or radio.jitter_ticks is set (got delay_ticks = {}, \
+                     jitter_ticks = {}): a frame that takes ticks cannot also arrive within one",
+                    q.delay_ticks, q.jitter_ticks
+                ),
+            )?;
+            check(
+                self.robots.program.is_empty() && self.robots.programs.is_empty(),
+                "radio.rounds",
+                "0 with robots.program or robots.programs: only the built-in robot answers \
+                 propagation rounds so far",
+            )?;
+        }
 
         self.validate_heights()?;
         self.faults.validate(self.robots.count)?;

@@ -185,3 +185,110 @@ fn appendix_a_shake_threads_the_corridor_and_replays_byte_for_byte() {
     assert_eq!(c["reached"], 16, "{c}");
     assert_eq!(c["tail_reached"], true, "{c}");
 }
+
+/// Robot -> tick of its first move, from `chain_propagation.csv`.
+fn first_moves(dir: &Path) -> Vec<(u32, u64)> {
+    let text = String::from_utf8(bytes(dir, "chain_propagation.csv")).unwrap();
+    text.lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[0].parse().unwrap(), f[1].parse::<f64>().unwrap() as u64)
+        })
+        .collect()
+}
+
+/// Ticks between the head's first move and the tail's (robot 15).
+fn head_to_tail_lag(dir: &Path) -> i64 {
+    let moves = first_moves(dir);
+    let at = |id: u32| moves.iter().find(|m| m.0 == id).map(|m| m.1 as i64);
+    at(15).expect("the tail moved") - at(0).expect("the head moved")
+}
+
+#[test]
+fn in_tick_rounds_move_the_chain_as_one_body_and_replay_byte_for_byte() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let dir = tmp.path().join(name);
+        let mut args = vec!["--ticks", "300"];
+        args.extend_from_slice(extra);
+        (run_config("configs/chain_corridor.toml", &dir, &args), dir)
+    };
+    // Without rounds a motion travels one robot per tick: the tail moves 15 ticks after the
+    // head. With enough rounds the whole chain reacts within the head's first tick.
+    let (_, base) = run("base", &["--in-process"]);
+    let (m, rounds) = run("rounds", &["--in-process", "--set", "radio.rounds=64"]);
+    assert!(head_to_tail_lag(&base) >= 14, "{:?}", first_moves(&base));
+    assert!(head_to_tail_lag(&rounds) <= 1, "{:?}", first_moves(&rounds));
+    let r = &m["rounds"];
+    assert_eq!(r["max_in_a_tick"], 15, "{r}");
+    assert_eq!(r["capped_ticks"], 0, "{r}");
+    assert_eq!(r["rejected"], 0, "{r}");
+    assert!(r["rounds"].as_u64().unwrap() > 1000, "{r}");
+    assert_eq!(m["chain"]["collisions"], 0, "{m}");
+    assert!(
+        m.get("rounds").is_some() && run_metrics_lacks_rounds(&base),
+        "{m}"
+    );
+    // A cap of 4 rounds: the motion gets 5 robots down the chain per tick, the rest is
+    // dropped as capped and carried on by the next tick.
+    let (m, capped) = run("capped", &["--in-process", "--set", "radio.rounds=4"]);
+    assert_eq!(m["rounds"]["max_in_a_tick"], 4, "{m}");
+    assert!(m["rounds"]["capped_ticks"].as_u64().unwrap() > 0, "{m}");
+    let lag = head_to_tail_lag(&capped);
+    assert!(lag > 1 && lag < head_to_tail_lag(&base), "lag {lag}");
+    // As robot processes with 30 % loss and a robot killed mid-run: the same bytes as in
+    // one process, and no round waits for the dead robot.
+    let lossy = [
+        "--set",
+        "radio.rounds=64",
+        "--set",
+        "radio.loss=0.3",
+        "--set",
+        "faults.kill=[{tick=150,robot=8}]",
+    ];
+    let (a, pa) = run("lossy_processes", &lossy);
+    let mut ip = lossy.to_vec();
+    ip.push("--in-process");
+    let (b, pb) = run("lossy_in_process", &ip);
+    assert_eq!(a["mode"], "processes", "{a}");
+    for file in ["trajectory.csv", "events.jsonl"] {
+        assert!(
+            bytes(&pa, file) == bytes(&pb, file),
+            "{file} differs between modes"
+        );
+    }
+    assert_eq!(a["rounds"], b["rounds"], "{a} {b}");
+    assert!(b["rounds"]["dropped"].as_u64().unwrap() > 0, "{b}");
+    assert_eq!(b["dead"], 1, "{b}");
+    assert_eq!(b["ticks"], 300, "{b}");
+}
+
+fn run_metrics_lacks_rounds(dir: &Path) -> bool {
+    swarmrt_tests::metrics(dir).get("rounds").is_none()
+}
+
+#[test]
+fn rounds_are_refused_where_they_cannot_hold() {
+    let tmp = tempfile::tempdir().unwrap();
+    let refused = |extra: &[&str], says: &str| {
+        let out = tmp.path().join("refused");
+        let mut args = vec![
+            "run",
+            "configs/chain_corridor.toml",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = swarmrt_tests::swarm(&args, std::time::Duration::from_secs(60));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains("radio.rounds") && err.contains(says), "{err}");
+    };
+    refused(
+        &["--set", "radio.rounds=8", "--set", "radio.delay_ticks=1"],
+        "delay_ticks = 1",
+    );
+    refused(&["--set", "radio.rounds=8", "--realtime"], "--realtime");
+    refused(&["--set", "radio.rounds=10001"], "10000");
+}

@@ -46,4 +46,6 @@ pub mod records;
 pub mod rng;
 pub mod world;
 
-pub use world::{Event, ProcessSignal, Robot, Stage, StageTimes, Stalled, World, WorldMetrics};
+pub use world::{
+    Event, ProcessSignal, Robot, RoundStats, Stage, StageTimes, Stalled, World, WorldMetrics,
+};

@@ -594,6 +594,11 @@ impl RadioMedium {
         self.groups = groups;
     }
 
+    /// True while a scheduled partition or blackout keeps robots `a` and `b` apart.
+    pub fn apart(&self, a: usize, b: usize) -> bool {
+        self.groups.as_ref().is_some_and(|g| g.get(a) != g.get(b))
+    }
+
     /// Draws the loss of one copy on the directed link `src -> dst`.
     fn lose(&mut self, src: u32, dst: u32) -> bool {
         match self.cfg.loss_model {

@@ -8,7 +8,7 @@
 #include <stdint.h>
 
 /* Every message's `version`. */
-#define SWARMRT_PROTOCOL_VERSION 4u
+#define SWARMRT_PROTOCOL_VERSION 5u
 /* Bytes in a radio frame's payload. */
 #define SWARMRT_MAX_PAYLOAD 128u
 /* Frames in one command's outbox. */
@@ -29,6 +29,8 @@
 #define SWARMRT_KIND_HELLO 1u
 /* Command kind: the decision for `tick`. */
 #define SWARMRT_KIND_ACT 2u
+/* Command kind: a reaction within `tick` to a propagation round (built-in robots only so far). */
+#define SWARMRT_KIND_REACT 3u
 /* Observation state: moving and sensing. */
 #define SWARMRT_STATE_ACTIVE 0u
 /* Observation state: knocked down; answer, the command is ignored. */
@@ -145,7 +147,8 @@ typedef struct swarmrt_command_t {
     uint8_t lidar_on;
     uint8_t _pad0[1];
     uint16_t outbox_len;
-    uint8_t _pad1[4];
+    uint16_t in_tick;
+    uint8_t _pad1[2];
     swarmrt_frame_t outbox[8];
     uint16_t report_len;
     uint8_t report[256];
@@ -164,6 +167,7 @@ _Static_assert(offsetof(swarmrt_command_t, vy) == 48, "layout");
 _Static_assert(offsetof(swarmrt_command_t, vz) == 56, "layout");
 _Static_assert(offsetof(swarmrt_command_t, lidar_on) == 64, "layout");
 _Static_assert(offsetof(swarmrt_command_t, outbox_len) == 66, "layout");
+_Static_assert(offsetof(swarmrt_command_t, in_tick) == 68, "layout");
 _Static_assert(offsetof(swarmrt_command_t, outbox) == 72, "layout");
 _Static_assert(offsetof(swarmrt_command_t, report_len) == 1288, "layout");
 _Static_assert(offsetof(swarmrt_command_t, report) == 1290, "layout");

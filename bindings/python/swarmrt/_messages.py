@@ -7,7 +7,7 @@ See docs/robot-interface.md.
 
 import ctypes
 
-PROTOCOL_VERSION = 4
+PROTOCOL_VERSION = 5
 """Every message's `version`."""
 MAX_PAYLOAD = 128
 """Bytes in a radio frame's payload."""
@@ -29,6 +29,8 @@ KIND_HELLO = 1
 """Command kind: the robot's ports exist."""
 KIND_ACT = 2
 """Command kind: the decision for `tick`."""
+KIND_REACT = 3
+"""Command kind: a reaction within `tick` to a propagation round (built-in robots only so far)."""
 STATE_ACTIVE = 0
 """Observation state: moving and sensing."""
 STATE_DOWN = 1
@@ -143,7 +145,8 @@ class Command(ctypes.Structure):
         ("lidar_on", ctypes.c_uint8),
         ("_pad0", ctypes.c_uint8 * 1),
         ("outbox_len", ctypes.c_uint16),
-        ("_pad1", ctypes.c_uint8 * 4),
+        ("in_tick", ctypes.c_uint16),
+        ("_pad1", ctypes.c_uint8 * 2),
         ("outbox", Frame * 8),
         ("report_len", ctypes.c_uint16),
         ("report", ctypes.c_uint8 * 256),

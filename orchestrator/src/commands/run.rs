@@ -71,6 +71,19 @@ fn run_with(
     if args.in_process {
         crate::config::refuse_foreign_in_process(&cfg, &args.config, "--in-process")?;
     }
+    if cfg.radio.rounds > 0 && (args.realtime || args.hosts.is_some()) {
+        let flag = if args.realtime {
+            "--realtime"
+        } else {
+            "--hosts"
+        };
+        return Err(SwarmError::User(format!(
+            "{}: key `radio.rounds`: expected 0 with {flag}, got {}: propagation rounds need \
+             every robot's answer within the tick on this host (drop {flag}, or set radio.rounds = 0)",
+            args.config.display(),
+            cfg.radio.rounds
+        )));
+    }
     // The directory is locked for the whole run (`_lock` lives until this returns): a second
     // run into it is refused, and so is an earlier run's directory unless --force.
     let (dir, _lock) = match &args.out {

@@ -54,6 +54,16 @@ pub fn run(
     };
     let node = ipc::node(run, &run.robot_node_name(id))?;
     let ports = ipc::RobotPorts::open(&node, run)?;
+    // With propagation rounds the robot sleeps in its own wake-up listener, which the world
+    // notifies for every tick and for the rounds that have frames for it.
+    let rounds = if cfg.radio.rounds > 0 {
+        Some(ipc::rounds::RobotRounds::open(&node, run, id)?)
+    } else {
+        None
+    };
+    // The observation this robot last answered, for the rounds of its tick, and the last
+    // round it reacted to.
+    let mut answered: Option<(Box<swarmrt_protocol::Observation>, u32)> = None;
     if let Some(s) = &restored {
         tracing::info!(
             term = s.term,
@@ -97,6 +107,9 @@ pub fn run(
                 continue;
             }
             let cmd = agent.step(obs);
+            if rounds.is_some() {
+                answered = Some((Box::new(*obs), 0));
+            }
             drop(sample);
             if let (Some(store), Some(state)) = (
                 store.as_mut(),
@@ -111,7 +124,35 @@ pub fn run(
             };
             ports.send(cmd)?;
         }
-        match ports.listener.timed_wait(|_| {}, IDLE_CHECK) {
+        if let Some(r) = &rounds {
+            // The rounds of the tick just answered: react to the newest one that holds frames
+            // for this robot (the world publishes a round only once all of the previous
+            // round's robots answered, so no round for it is ever skipped).
+            while let Some(sample) = r.subscriber.receive()? {
+                let header = *sample.user_header();
+                let Some((obs, last)) = answered.as_mut() else {
+                    continue;
+                };
+                if header.version != PROTOCOL_VERSION
+                    || header.tick != obs.tick
+                    || header.round <= *last
+                {
+                    continue;
+                }
+                let inboxes = sample.payload();
+                let Ok(k) = inboxes.binary_search_by_key(&id, |b| b.robot) else {
+                    continue;
+                };
+                let cmd = agent.react(obs, inboxes[k].inbox());
+                *last = header.round;
+                drop(sample);
+                ports.send(cmd)?;
+            }
+            // The tick's broadcast wake-up is for observers; this robot's own listener woke it.
+            ports.listener.try_wait(|_| {})?;
+        }
+        let listener = rounds.as_ref().map_or(&ports.listener, |r| &r.listener);
+        match listener.timed_wait(|_| {}, IDLE_CHECK) {
             Ok(_) => {}
             // A signal interrupted the wait: SIGTERM/SIGINT (checked below) or the SIGCONT
             // ending a freeze, after which Linux fails the wait with EINTR.

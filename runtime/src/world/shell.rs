@@ -414,6 +414,22 @@ pub fn run(
         n,
         observers,
     )?;
+    if cfg.radio.rounds > 0 && (hosts.is_some() || mode == Mode::Realtime) {
+        return Err(
+            "radio.rounds needs every robot on this host, in lock-step (no --hosts, no --realtime)"
+                .into(),
+        );
+    }
+    let rounds = if cfg.radio.rounds > 0 {
+        Some(ipc::rounds::WorldRounds::create(
+            &node,
+            run,
+            n,
+            8 + cfg.faults.restart.len() + observers,
+        )?)
+    } else {
+        None
+    };
     let control = spawn_control_thread(run)?;
     let remote = match hosts {
         Some((file, layout)) => Some(Remote::open(run, file, layout)?),
@@ -425,6 +441,7 @@ pub fn run(
         world,
         node: &node,
         ports,
+        rounds,
         control,
         remote,
         hellos: Bindings::awaiting(0..n as u32),
@@ -467,6 +484,8 @@ struct Shell<'a> {
     world: World,
     node: &'a Node<ipc::Svc>,
     ports: ipc::WorldPorts,
+    /// The propagation rounds' ports (`radio.rounds` > 0).
+    rounds: Option<ipc::rounds::WorldRounds>,
     /// Control lines from the orchestrator.
     control: Receiver<Control>,
     /// The remote hosts (`--hosts` runs).
@@ -590,10 +609,14 @@ impl Shell<'_> {
                 }
             } else {
                 self.collect(tick, deadline)?;
+                if !self.interrupted {
+                    self.propagate(tick, deadline)?;
+                }
             }
             if self.interrupted {
                 break;
             }
+            // With rounds, `wait` includes them.
             let t3 = Instant::now();
             self.world.step(&self.commands);
             let events = self.world.drain_events();
@@ -714,10 +737,52 @@ impl Shell<'_> {
         };
         sample.send()?;
         self.ports.notifier.notify()?;
+        if let Some(rounds) = &self.rounds {
+            for &robot in &self.pending {
+                rounds.wake(robot)?;
+            }
+        }
         if let Some(r) = self.remote.as_mut() {
             r.send_tick(tick, obs, &self.pending)?;
         }
         Ok(())
+    }
+
+    /// The tick's propagation rounds (`radio.rounds` > 0), as [`swarmrt_harness`]'s
+    /// `Lockstep::propagate` runs them: each round is published to the robots woken in it,
+    /// their reactions are collected as a tick's answers are (deadline, unresponsive, deaths)
+    /// and applied in ascending robot order.
+    fn propagate(&mut self, tick: u64, deadline: Duration) -> Result<(), IpcError> {
+        let Some(rounds) = self.rounds.take() else {
+            return Ok(());
+        };
+        let mut acts = std::mem::take(&mut self.commands);
+        self.commands = vec![None; acts.len()];
+        self.world.start_rounds(&acts);
+        let result = loop {
+            let round = self.world.next_round();
+            if round.is_empty() {
+                break Ok(());
+            }
+            self.commands.iter_mut().for_each(|c| *c = None);
+            self.pending = round.iter().map(|b| b.robot).collect();
+            if let Err(e) = rounds.publish(tick, self.world.round(), &round) {
+                break Err(e);
+            }
+            if let Err(e) = self.collect(tick, deadline) {
+                break Err(e);
+            }
+            for b in &round {
+                let answer = self.commands[b.robot as usize];
+                self.world.react(b.robot, answer.as_ref(), &mut acts);
+            }
+            if self.interrupted {
+                break Ok(());
+            }
+        };
+        self.commands = acts;
+        self.rounds = Some(rounds);
+        result
     }
 
     /// Lock-step: waits until every pending robot answered. Past `deadline` the late ones are

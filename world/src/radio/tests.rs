@@ -602,6 +602,7 @@ fn random_run_recorded(
         jitter_ticks: r.random_range(0..=3),
         capacity: r.random_range(1..=MAX_OUTBOX as u32),
         line_of_sight: r.random::<bool>(),
+        rounds: 0,
     };
     let max_lag = 1 + cfg.delay_ticks as u64 + cfg.jitter_ticks as u64;
     let mut m = RadioMedium::new(cfg, radio_seed, n);

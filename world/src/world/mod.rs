@@ -14,6 +14,10 @@
 //!    reached the goal.
 //! 6. `faults.rs`: the faults of the new tick boundary.
 //!
+//! Before `step`, with `radio.rounds`, the shells run the tick's propagation rounds
+//! (`rounds.rs`): frames sent within the tick wake their receivers, whose reactions replace
+//! their motion for the tick.
+//!
 //! `sensing.rs` also builds the observations ([`World::observe`]); `stage_times.rs` adds up
 //! the wall-clock time of each stage when the shell asks for it.
 
@@ -32,6 +36,7 @@ mod commands;
 mod contacts;
 mod faults;
 mod kinematics;
+mod rounds;
 mod route;
 mod sensing;
 mod stage_times;
@@ -39,6 +44,8 @@ mod stall;
 
 use faults::Outage;
 pub use faults::ProcessSignal;
+pub use rounds::RoundStats;
+use rounds::Rounds;
 pub use sensing::{OBSERVE_THREADS, PARALLEL_OBSERVE_MIN, worker_threads};
 pub use stage_times::{Stage, StageTimes};
 use stall::StallWatch;
@@ -104,6 +111,9 @@ pub struct WorldMetrics {
     /// absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stalled: Option<Stalled>,
+    /// What the in-tick propagation rounds did (`radio.rounds` > 0 only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rounds: Option<RoundStats>,
 }
 
 /// The world of one run.
@@ -135,6 +145,8 @@ pub struct World {
     stage_times: StageTimes,
     /// Where each robot last moved, for `scenario.stall_ticks`.
     stall: StallWatch,
+    /// In-tick propagation rounds (`radio.rounds` > 0).
+    rounds: Option<Rounds>,
 }
 
 impl World {
@@ -197,6 +209,7 @@ impl World {
             fault_rng: rng::stream(seed, "faults", 0),
             stage_times: StageTimes::default(),
             stall: StallWatch::default(),
+            rounds: (cfg.radio.rounds > 0).then(|| Rounds::new(cfg.radio.rounds, seed)),
             robots,
         };
         world.check_goal();
@@ -228,6 +241,7 @@ impl World {
     pub fn metrics(&self) -> WorldMetrics {
         let mut m = self.metrics.clone();
         m.radio = self.radio.stats();
+        m.rounds = self.rounds.as_ref().map(Rounds::stats);
         m
     }
 

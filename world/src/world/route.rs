@@ -18,9 +18,13 @@ impl World {
             .iter()
             .map(|r| r.state == RobotState::Active)
             .collect();
+        // Frames that travelled within the tick (`radio.rounds`) went already.
         let outboxes: Vec<&[Frame]> = accepted
             .iter()
-            .map(|c| c.map(|c| c.outbox()).unwrap_or(&[]))
+            .map(|c| {
+                c.map(|c| &c.outbox()[self.in_tick_frames(c)..])
+                    .unwrap_or(&[])
+            })
             .collect();
         let map = &self.map;
         let mut blocked = |a: usize, b: usize| map.blocks(positions[a], positions[b]);

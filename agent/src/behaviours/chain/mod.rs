@@ -22,6 +22,13 @@
 //! last step) short of `rod_max`, so a steadily pulled rod ends at `rod_max` despite the
 //! one-tick lag.
 //!
+//! **Within one tick, as Appendix A's recursion** (`radio.rounds` > 0): a robot that moves
+//! also tells its slaves, within the tick, where it will be after it ([`Chain::react`]); each
+//! slave adapts to that point in the next round and passes its own new motion on, so the
+//! whole chain answers the initiator's motion of this tick in this tick. A slave whose rod
+//! stays in limits does not move and passes nothing on: the recursion stops where the paper's
+//! `Adaptation` returns.
+//!
 //! **Veto** (Fig. 3). A slave that cannot adapt objects: a stationary robot whose master
 //! left its rod limits, or a slave that found no collision-free guiding line for
 //! `trapped_ticks`. It sends `veto = 1` to its master in its `Link` every tick while it
@@ -129,6 +136,8 @@ pub struct Chain {
     turning: (u32, f64),
     /// Draws of Appendix A's shake (`rotate = "shake"`; untouched otherwise).
     rng: Rng,
+    /// `radio.rounds` > 0: motions pass along the chain within the tick ([`Chain::react`]).
+    rounds: bool,
 }
 
 impl Chain {
@@ -176,7 +185,8 @@ impl Chain {
 
     /// Appendix A's `Adaptation` of this robot to `master` at `m`, with Push-Pull-Rotate:
     /// the target point, or `None` when no collision-free guiding line exists (trapped).
-    fn adaptation(&mut self, obs: &Observation, master: u32, m: P, lead: f64) -> Option<P> {
+    /// `third` is the connector angle's third corner (the master's other neighbour).
+    fn adaptation(&mut self, obs: &Observation, m: P, third: Option<P>, lead: f64) -> Option<P> {
         let pose = (obs.x, obs.y, obs.theta);
         self.sense_hits(obs);
         let hits = &self.hits;
@@ -220,7 +230,7 @@ impl Chain {
                 .or_else(|| ahead().next());
         }
         let (_, mut target) = adapt(m, me, self.p.rod_min, self.p.rod_max, lead);
-        if let Some(q) = self.third_corner(obs, master) {
+        if let Some(q) = third {
             let clamped = clamp_angle(
                 q,
                 m,
@@ -243,6 +253,46 @@ impl Chain {
         match adapt(s, me, self.p.rod_min, self.p.rod_max, 0.0) {
             (Reaction::Resize, _) => me,
             _ => adapt(s, me, mid, mid, 0.0).1,
+        }
+    }
+
+    /// Where this robot will be after the tick with the motion in `act` (the world's
+    /// unicycle step: heading first, then position), from where it senses itself.
+    fn next_position(&self, obs: &Observation, act: &Act<Link, ChainNote>) -> [f32; 2] {
+        let theta = obs.theta + act.omega * self.dt;
+        let d = act.v * self.dt;
+        [(obs.x + d * theta.cos()) as f32, (obs.y + d * theta.sin()) as f32]
+    }
+
+    /// Passes this robot's motion of the tick on to its slaves, within the tick: where it
+    /// will be, and (as the third corner of their connector angle) where `master` is.
+    /// A robot that stays where it is passes nothing: its slaves already adapted to where
+    /// they see it, so a still chain costs no rounds.
+    fn pass_on(&self, obs: &Observation, master: Option<[f32; 2]>, act: &mut Act<Link, ChainNote>) {
+        if act.v.abs() < 1e-9 {
+            return;
+        }
+        let [x, y] = self.next_position(obs, act);
+        for &s in &self.slaves {
+            let third = match self.master {
+                Some(_) => master,
+                // The initiator: each slave's third corner is the other slave.
+                None => self
+                    .slaves
+                    .iter()
+                    .find(|&&o| o != s)
+                    .and_then(|&o| self.locate(obs, o))
+                    .map(|(x, y)| [x as f32, y as f32]),
+            };
+            act.send_in_tick(
+                s,
+                Link {
+                    x,
+                    y,
+                    master: third,
+                    veto: 0,
+                },
+            );
         }
     }
 
@@ -315,7 +365,8 @@ impl Chain {
             // No master in sight or heard: it stays (a chain cut here stands still behind).
             return (0, None);
         };
-        match self.adaptation(obs, master, m, lead) {
+        let third = self.third_corner(obs, master);
+        match self.adaptation(obs, m, third, lead) {
             Some(target) => {
                 self.trapped = 0;
                 self.drive(obs, target, act);
@@ -414,6 +465,7 @@ impl Behaviour for Chain {
             replan: None,
             turning: (0, 0.0),
             rng: rng::stream(cfg.scenario.seed, "chain-shake", id as u64),
+            rounds: cfg.radio.rounds > 0,
         }
     }
 
@@ -451,6 +503,9 @@ impl Behaviour for Chain {
             self.follow(obs, act)
         } else {
             self.lead(obs, act);
+            if self.rounds {
+                self.pass_on(obs, None, act);
+            }
             (0, None)
         };
         if let (Some(master), Some(why)) = (self.master, why)
@@ -486,6 +541,47 @@ impl Behaviour for Chain {
                 act.send(s, Link { master: m, ..me });
             }
         }
+    }
+
+    /// Appendix A's recursion over the radio (`radio.rounds`): the master's motion of this
+    /// tick arrives within the tick as where it will be; the slave adapts to that point
+    /// instead of to where it sees its master now, and passes its own new motion on to its
+    /// slaves in the next round, so the whole chain moves as one body in one tick. A robot
+    /// that is stationary, in a veto event or trapped keeps its decision and passes nothing
+    /// on (the chain behind it adapts at the next tick, as without rounds).
+    fn react(&mut self, obs: &Observation, round: &[Heard<Link>], act: &mut Act<Link, ChainNote>) {
+        let Some(master) = self.master else { return };
+        if obs.state != RobotState::Active as u8 || self.stationary {
+            return;
+        }
+        if self.veto_in.is_some_and(|v| obs.tick < v.until) {
+            return;
+        }
+        let finite = |[x, y]: [f32; 2]| x.is_finite() && y.is_finite();
+        let Some(link) = round
+            .iter()
+            .rev()
+            .find(|h| h.src == master)
+            .map(|h| h.msg)
+            .filter(|l| finite([l.x, l.y]) && l.master.is_none_or(finite))
+        else {
+            return;
+        };
+        let m = (link.x as f64, link.y as f64);
+        let third = link.master.map(|[x, y]| (x as f64, y as f64));
+        // Around an obstacle the tick's decision already follows the master's trail (or its
+        // shake): that is kept, and only where this robot will be is passed on.
+        self.sense_hits(obs);
+        let clearance = self.radius + self.p.line_clearance;
+        let ignore = 2.0 * self.radius + self.p.line_clearance;
+        let m_here = to_robot_frame((obs.x, obs.y, obs.theta), m);
+        if !line_blocked(&self.hits, m_here, clearance, ignore) {
+            let Some(target) = self.adaptation(obs, m, third, 0.0) else {
+                return;
+            };
+            self.drive(obs, target, act);
+        }
+        self.pass_on(obs, Some([link.x, link.y]), act);
     }
 
     fn metrics(cfg: &Config, params: &ChainParams, run: &Records) -> Vec<(&'static str, serde_json::Value)> {
