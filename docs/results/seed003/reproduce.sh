@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates every number and figure of docs/results/seed003.md (about 10 minutes on 2
+# Regenerates every number and figure of docs/results/seed003.md (about 15 minutes on 2
 # cores, most of it the loss-and-delay sweep and the 451-process runs).
 set -euo pipefail
 cd "$(dirname "$0")/../../.."
@@ -52,6 +52,9 @@ python3 $out/table.py killed=$killed > $out/killed.md
 
 # Appendix A's random shake against the trail (about 2 minutes).
 python3 $out/rotate.py $swarm $tmp/rotate > $out/rotate.md
+
+# Appendix A's recursion within one tick (radio.rounds), as processes (about 5 minutes).
+python3 $out/rounds.py $swarm $tmp/rounds > $out/rounds.md
 
 # Beyond the paper: loss and delay.
 bash $out/sweep.sh $tmp/sweep
