@@ -292,3 +292,31 @@ fn rounds_are_refused_where_they_cannot_hold() {
     refused(&["--set", "radio.rounds=8", "--realtime"], "--realtime");
     refused(&["--set", "radio.rounds=10001"], "10000");
 }
+
+#[test]
+fn with_rounds_the_heads_motion_reaches_the_tail_of_451_robots_within_its_tick() {
+    // Only the initiator starts rounds (round k wakes robot k), so a tick of 450 rounds is
+    // one in which robot 450 reacted to the head's motion of that very tick.
+    let tmp = tempfile::tempdir().unwrap();
+    let args = ["--ticks", "30", "--set", "radio.rounds=1024"];
+    let (pa, pb) = (tmp.path().join("processes"), tmp.path().join("in-process"));
+    let a = run_config("configs/chain_450.toml", &pa, &args);
+    let mut ip = args.to_vec();
+    ip.push("--in-process");
+    let b = run_config("configs/chain_450.toml", &pb, &ip);
+    assert_eq!(a["mode"], "processes", "{a}");
+    for file in ["trajectory.csv", "events.jsonl"] {
+        assert!(
+            bytes(&pa, file) == bytes(&pb, file),
+            "{file} differs between modes"
+        );
+    }
+    let r = &a["rounds"];
+    assert_eq!(r["max_in_a_tick"], 450, "{r}");
+    assert_eq!(r["capped_ticks"], 0, "{r}");
+    assert_eq!(a["rounds"], b["rounds"], "{a} {b}");
+    let c = &a["chain"];
+    assert_eq!(c["rod_violations"], 0, "{c}");
+    assert_eq!(c["angle_violations"], 0, "{c}");
+    assert_eq!(c["collisions"], 0, "{c}");
+}
