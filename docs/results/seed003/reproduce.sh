@@ -55,6 +55,7 @@ python3 $out/rotate.py $swarm $tmp/rotate > $out/rotate.md
 
 # Appendix A's recursion within one tick (radio.rounds), as processes (about 5 minutes).
 python3 $out/rounds.py $swarm $tmp/rounds > $out/rounds.md
+python3 $out/rounds.py $swarm $tmp/rounds_ip in-process > $out/rounds_in_process.md
 
 # Beyond the paper: loss and delay.
 bash $out/sweep.sh $tmp/sweep
