@@ -10,6 +10,31 @@ use crate::consensus::{ConsensusMsg, Decision};
 use crate::inbox::Heard;
 use crate::registry::{self, Brain, Note, Out, RadioMsg, Tick};
 
+/// The motion fields of a command: what a reaction starts from and may replace.
+#[derive(Debug, Clone, Copy, Default)]
+struct Motion {
+    v: f64,
+    omega: f64,
+    velocity: [f64; 3],
+    lidar_on: u8,
+}
+
+impl Motion {
+    fn of(c: &Command) -> Motion {
+        Motion {
+            v: c.v,
+            omega: c.omega,
+            velocity: [c.vx, c.vy, c.vz],
+            lidar_on: c.lidar_on,
+        }
+    }
+
+    fn onto(self, c: &mut Command) {
+        (c.v, c.omega, c.lidar_on) = (self.v, self.omega, self.lidar_on);
+        [c.vx, c.vy, c.vz] = self.velocity;
+    }
+}
+
 /// One robot's brain.
 pub struct Agent {
     id: u32,
@@ -19,7 +44,7 @@ pub struct Agent {
     heard: Vec<Heard<RadioMsg>>,
     consensus_inbox: Vec<Heard<ConsensusMsg>>,
     /// This tick's motion as last decided (by `step` or a reaction), for the next reaction.
-    decided: Command,
+    decided: Motion,
 }
 
 impl Agent {
@@ -53,7 +78,7 @@ impl Agent {
             consensus,
             heard: Vec::new(),
             consensus_inbox: Vec::new(),
-            decided: Command::act(id, 0),
+            decided: Motion::default(),
         }
     }
 
@@ -75,7 +100,7 @@ impl Agent {
     /// Decides this tick's command from this tick's observation.
     pub fn step(&mut self, obs: &Observation) -> Command {
         let cmd = self.decide(obs);
-        self.decided = cmd;
+        self.decided = Motion::of(&cmd);
         cmd
     }
 
@@ -89,17 +114,13 @@ impl Agent {
         if RobotState::from_u8(obs.state) != Some(RobotState::Active) {
             return cmd;
         }
-        let d = &self.decided;
-        (cmd.v, cmd.omega, cmd.vx, cmd.vy, cmd.vz) = (d.v, d.omega, d.vx, d.vy, d.vz);
-        cmd.lidar_on = d.lidar_on;
+        self.decided.onto(&mut cmd);
         let mut notes: Vec<Note> = Vec::new();
         self.brain.react(obs, &mut self.heard, &mut cmd, &mut notes);
         // A reaction's frames all travel within the tick.
         cmd.in_tick = cmd.outbox_len;
         let _ = cmd.set_notes(&notes);
-        let d = &mut self.decided;
-        (d.v, d.omega, d.vx, d.vy, d.vz) = (cmd.v, cmd.omega, cmd.vx, cmd.vy, cmd.vz);
-        d.lidar_on = cmd.lidar_on;
+        self.decided = Motion::of(&cmd);
         cmd
     }
 

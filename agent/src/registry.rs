@@ -257,14 +257,7 @@ impl<B: Enveloped> Brain for Driver<B> {
         if let Some(l) = &tick.leadership {
             self.behaviour.lead(l);
         }
-        self.inbox.clear();
-        self.inbox.extend(tick.heard.drain(..).filter_map(|h| {
-            Some(Heard {
-                src: h.src,
-                sent_tick: h.sent_tick,
-                msg: B::unwrap_msg(h.msg)?,
-            })
-        }));
+        self.take_inbox(tick.heard);
         self.act.reset();
         self.behaviour.step(obs, &self.inbox, &mut self.act);
         out.proposals.extend_from_slice(self.act.proposals());
@@ -278,14 +271,7 @@ impl<B: Enveloped> Brain for Driver<B> {
         cmd: &mut Command,
         notes: &mut Vec<Note>,
     ) {
-        self.inbox.clear();
-        self.inbox.extend(heard.drain(..).filter_map(|h| {
-            Some(Heard {
-                src: h.src,
-                sent_tick: h.sent_tick,
-                msg: B::unwrap_msg(h.msg)?,
-            })
-        }));
+        self.take_inbox(heard);
         self.act.reset();
         self.act.v = cmd.v;
         self.act.omega = cmd.omega;
@@ -297,6 +283,18 @@ impl<B: Enveloped> Brain for Driver<B> {
 }
 
 impl<B: Enveloped> Driver<B> {
+    /// Keeps the messages of this behaviour's kind from `heard` (all of it is taken).
+    fn take_inbox(&mut self, heard: &mut Vec<Heard<RadioMsg>>) {
+        self.inbox.clear();
+        self.inbox.extend(heard.drain(..).filter_map(|h| {
+            Some(Heard {
+                src: h.src,
+                sent_tick: h.sent_tick,
+                msg: B::unwrap_msg(h.msg)?,
+            })
+        }));
+    }
+
     /// Writes the act's motion, frames (those within the tick first) and notes into `cmd`.
     fn fill(&mut self, cmd: &mut Command, notes: &mut Vec<Note>) {
         cmd.v = self.act.v;

@@ -31,14 +31,15 @@ range = 1.5
     World::new(&cfg, Vocabulary::ANY).unwrap()
 }
 
-/// Every robot stands still; robot 0 sends `frames` (the first `in_tick` within the tick).
-fn commands(w: &World, to: &[u32], in_tick: u16) -> Vec<Option<Command>> {
+/// Every robot stands still; robot `from` sends one frame to each of `to`, the first
+/// `in_tick` of them within the tick.
+fn commands(w: &World, from: u32, to: &[u32], in_tick: u16) -> Vec<Option<Command>> {
     (0..4)
         .map(|i| {
             let mut c = Command::act(i, w.tick());
-            if i == 0 {
+            if i == from {
                 for &dst in to {
-                    c.push_frame(dst, &(7u8, dst)).unwrap();
+                    c.push_frame(dst, &(1u8,)).unwrap();
                 }
                 c.in_tick = in_tick;
             }
@@ -133,10 +134,7 @@ fn a_motion_passes_down_the_row_within_one_tick_and_only_receivers_wake() {
 fn the_cap_ends_the_rounds_and_counts_what_was_still_in_flight() {
     let mut w = world("rounds = 1");
     let order = row_order(&w);
-    let mut cmds = commands(&w, &[], 0);
-    let c0 = cmds[order[0] as usize].as_mut().unwrap();
-    c0.push_frame(order[1], &(1u8,)).unwrap();
-    c0.in_tick = 1;
+    let mut cmds = commands(&w, order[0], &[order[1]], 1);
     w.start_rounds(&cmds);
     assert_eq!(w.next_round().len(), 1);
     let react = reaction(&w, order[1], 0.0, &[order[2]]);
@@ -151,10 +149,7 @@ fn range_loss_and_a_refused_reaction_are_counted_not_delivered() {
     // Robot 0 broadcasts within the tick: only the neighbours within 1.5 m hear it.
     let mut w = world("rounds = 4");
     let order = row_order(&w);
-    let mut cmds = commands(&w, &[], 0);
-    let c = cmds[order[0] as usize].as_mut().unwrap();
-    c.push_frame(swarmrt_protocol::BROADCAST, &(1u8,)).unwrap();
-    c.in_tick = 1;
+    let mut cmds = commands(&w, order[0], &[swarmrt_protocol::BROADCAST], 1);
     w.start_rounds(&cmds);
     let r = w.next_round();
     assert_eq!(
@@ -173,10 +168,7 @@ fn range_loss_and_a_refused_reaction_are_counted_not_delivered() {
     // Total loss: a frame within the tick never arrives, and no robot wakes.
     let mut w = world("rounds = 4\nloss = 1.0");
     let order = row_order(&w);
-    let mut cmds = commands(&w, &[], 0);
-    let c = cmds[order[0] as usize].as_mut().unwrap();
-    c.push_frame(order[1], &(1u8,)).unwrap();
-    c.in_tick = 1;
+    let cmds = commands(&w, order[0], &[order[1]], 1);
     w.start_rounds(&cmds);
     assert!(w.next_round().is_empty());
     let m = w.metrics().rounds.unwrap();
@@ -187,10 +179,7 @@ fn range_loss_and_a_refused_reaction_are_counted_not_delivered() {
 fn without_rounds_in_tick_frames_are_ordinary_and_no_round_runs() {
     let mut w = world("");
     let order = row_order(&w);
-    let mut cmds = commands(&w, &[], 0);
-    let c = cmds[order[0] as usize].as_mut().unwrap();
-    c.push_frame(order[1], &(1u8,)).unwrap();
-    c.in_tick = 1;
+    let cmds = commands(&w, order[0], &[order[1]], 1);
     assert!(!w.has_rounds());
     w.start_rounds(&cmds);
     assert!(w.next_round().is_empty());
