@@ -162,10 +162,15 @@ pub struct PlanArgs {
 #[derive(Parser, Debug, Clone)]
 pub struct SweepArgs {
     /// The scenario file.
-    pub config: PathBuf,
+    #[arg(required_unless_present = "collect")]
+    pub config: Option<PathBuf>,
     /// A config key and its values, e.g. --vary radio.loss=0,0.1,0.2 (repeatable). The first
     /// key is the plots' x axis, the second their lines, further ones one plot per value.
-    #[arg(long = "vary", value_name = "KEY=V1,V2,...", required = true)]
+    #[arg(
+        long = "vary",
+        value_name = "KEY=V1,V2,...",
+        required_unless_present = "collect"
+    )]
     pub vary: Vec<String>,
     /// Seeds per combination: start-seed, start-seed + 1, ...
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
@@ -179,6 +184,14 @@ pub struct SweepArgs {
     /// The sweep directory [default: sweeps/<scenario>-<time>/]; an existing one is resumed.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// With --executor slurm: submit the runs and return at once; `swarm sweep --collect
+    /// <out>` (or the same command again) waits for them and writes the rows.
+    #[arg(long)]
+    pub detach: bool,
+    /// Gather the runs a detached sweep submitted into its sweep.csv, plots and summary.md
+    /// (waits for those still queued); no other argument is needed.
+    #[arg(long, value_name = "SWEEP_DIR", exclusive = true)]
+    pub collect: Option<PathBuf>,
     /// A metric to plot and summarise, e.g. radio.dropped (repeatable) [default:
     /// reached_target, down, collisions, and steps_to_target, radio.delivered when present].
     #[arg(long = "metric", value_name = "NAME")]
@@ -244,15 +257,51 @@ pub struct TuneArgs {
 /// which overrides.
 #[derive(Args, Debug, Clone)]
 pub struct PoolArgs {
-    /// Runs at once.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
-    pub jobs: u64,
+    /// Runs at once [default: 1 on this machine (at most 256); with --executor slurm, as many
+    /// as the cluster gives (the array's `%N` limit)].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    pub jobs: Option<u64>,
     /// Run every scenario with the same cores in one process each, no IPC (identical results).
     #[arg(long)]
     pub in_process: bool,
     /// Override a config key in every run, e.g. --set scenario.ticks=300 (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    /// Where the runs are made [default: local, or the --executor-config file's `kind`]:
+    /// `local` on this machine, `slurm` as job arrays of a Slurm cluster (docs/cluster.md).
+    #[arg(long, value_enum)]
+    pub executor: Option<ExecutorKind>,
+    /// A TOML file with an `[executor]` section (kind, partition, time, mem, sbatch_args,
+    /// jobs, poll_seconds); the command line's flags win over it.
+    #[arg(long, value_name = "FILE")]
+    pub executor_config: Option<PathBuf>,
+    /// Slurm partition of the runs (`sbatch --partition`).
+    #[arg(long, help_heading = "Slurm")]
+    pub partition: Option<String>,
+    /// Slurm time limit per run (`sbatch --time`), e.g. 00:10:00.
+    #[arg(long, help_heading = "Slurm")]
+    pub time: Option<String>,
+    /// Slurm memory per run (`sbatch --mem`), e.g. 2G.
+    #[arg(long, help_heading = "Slurm")]
+    pub mem: Option<String>,
+    /// Another `sbatch` argument, e.g. --sbatch-arg=--qos=short (repeatable).
+    #[arg(
+        long = "sbatch-arg",
+        value_name = "ARG",
+        allow_hyphen_values = true,
+        help_heading = "Slurm"
+    )]
+    pub sbatch_args: Vec<String>,
+}
+
+/// Where `swarm sweep` and `swarm tune` make their runs.
+#[derive(clap::ValueEnum, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum ExecutorKind {
+    /// Child `swarm run` processes on this machine, --jobs at a time.
+    Local,
+    /// One Slurm job array per batch of runs (`sbatch --array`), on a filesystem the nodes share.
+    Slurm,
 }
 
 /// `swarm bench <what> [args]`: everything after `bench` goes to `swarm-bench` untouched,

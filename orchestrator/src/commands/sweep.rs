@@ -3,10 +3,11 @@
 //! plots and `summary.md` are drawn from all rows at the end. Re-running the same command
 //! with the same `--out` runs only what is missing (or failed).
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::IsTerminal;
 use std::path::Path;
 
+use clap::Parser;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use swarmrt_scenario::Config;
 use swarmrt_world::WorldMetrics;
@@ -15,9 +16,11 @@ use crate::cli::SweepArgs;
 use crate::config::load_config;
 use crate::error::{SwarmError, SwarmResult};
 use crate::run_dir;
+use crate::sweep::executor::{self, Executor};
 use crate::sweep::plan::{self, Plan, RunSpec};
 use crate::sweep::report::{self, SummaryHead};
 use crate::sweep::runner::{self, Event, Job, Outcome, PoolOptions};
+use crate::sweep::slurm;
 use swarmrt_analysis::stats::Groups;
 use swarmrt_analysis::sweep_csv::{self as table, FAILED, Row, SEED, SweepCsv, Table};
 
@@ -49,8 +52,30 @@ struct Existing {
     done: BTreeSet<RunKey>,
 }
 
-/// Runs the sweep.
+/// Runs the sweep, or (`--collect`) gathers the runs a detached one submitted.
 pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> SwarmResult<()> {
+    match &args.collect {
+        Some(dir) => {
+            let args = detached_command(dir)?;
+            sweep_with(&args, interrupt, true)
+        }
+        None => sweep_with(args, interrupt, false),
+    }
+}
+
+/// File of a sweep directory holding the command of its detached submission.
+const DETACHED_COMMAND: &str = "command.json";
+
+fn sweep_with(
+    args: &SweepArgs,
+    interrupt: crossbeam_channel::Receiver<()>,
+    collect_only: bool,
+) -> SwarmResult<()> {
+    let Some(config) = args.config.as_deref() else {
+        return Err(SwarmError::User(
+            "give the scenario file (or --collect <sweep dir>)".into(),
+        ));
+    };
     let varies = args
         .vary
         .iter()
@@ -65,7 +90,13 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
             )));
         }
     }
-    let base = load_config(&args.config, &args.pool.set)?;
+    let executor = executor::resolve(&args.pool)?;
+    if args.detach && !matches!(executor, Executor::Slurm(_)) {
+        return Err(SwarmError::User(
+            "--detach needs a cluster to leave the runs to: add --executor slurm".into(),
+        ));
+    }
+    let base = load_config(config, &args.pool.set)?;
     let start = args.start_seed.unwrap_or(base.scenario.seed);
     let plan = Plan::new(&varies, start, args.seeds).map_err(SwarmError::User)?;
 
@@ -74,7 +105,7 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
     for c in 0..plan.combos.len() {
         let mut set = args.pool.set.clone();
         set.extend(plan.overrides(c));
-        let cfg = load_config(&args.config, &set).map_err(|e| match e {
+        let cfg = load_config(config, &set).map_err(|e| match e {
             SwarmError::User(m) if plan.combos.len() > 1 => {
                 SwarmError::User(format!("{m} (with {})", plan.describe(c)))
             }
@@ -103,16 +134,83 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
         &configs[0],
         existing.as_ref().map(|e| &e.table),
     )?;
-
     let all_runs = plan.runs();
+    let spec_of_dir: BTreeMap<String, RunSpec> =
+        all_runs.iter().map(|r| (plan.dir_name(*r), *r)).collect();
+    let submitted = slurm::pending_arrays(&out)?;
+    check_submitted(&submitted, &spec_of_dir, &configs, &out)?;
+
+    std::fs::create_dir_all(&out)
+        .map_err(|e| SwarmError::User(format!("cannot create {}: {e}", out.display())))?;
+    let mut csv = SweepCsv::open(&csv_path, &plan.keys, existing.as_ref().map(|e| &e.table))?;
+    let mut done: BTreeSet<RunKey> = existing.map(|e| e.done).unwrap_or_default();
+    let key_of = |r: &RunSpec| (plan.combos[r.combo].clone(), r.seed);
+    let swarm = std::env::current_exe()
+        .map_err(|e| anyhow::anyhow!("cannot locate the swarm executable: {e}"))?;
+    let opts = PoolOptions {
+        swarm,
+        in_process: args.pool.in_process,
+        executor: executor.clone(),
+        state_dir: out.clone(),
+    };
+    let mut fold = Fold {
+        plan: &plan,
+        out: &out,
+        csv: &mut csv,
+        pb: progress_bar(0),
+        failures: Vec::new(),
+        stopped_from_outside: Vec::new(),
+        write_error: None,
+        stopping: false,
+        slurm: matches!(executor, Executor::Slurm(_)),
+    };
+
+    // Runs an earlier (detached or stopped) invocation left to Slurm come first: they are not
+    // submitted again, only waited for.
+    let mut interrupted = false;
+    if !submitted.is_empty() {
+        let specs: Vec<Option<RunSpec>> = submitted
+            .iter()
+            .flat_map(|a| &a.runs)
+            .map(|r| {
+                let name = r.file_name()?.to_string_lossy().into_owned();
+                let spec = spec_of_dir.get(&name).copied()?;
+                (!done.contains(&key_of(&spec))).then_some(spec)
+            })
+            .collect();
+        let ids: Vec<&str> = submitted.iter().map(|a| a.job_id.as_str()).collect();
+        fold.pb = progress_bar(specs.iter().flatten().count() as u64);
+        fold.say(format!(
+            "sweep: waiting for {} runs already submitted to Slurm (job {}); Ctrl-C stops \
+             waiting and leaves them queued",
+            specs.iter().flatten().count(),
+            ids.join(", ")
+        ));
+        let poll = match &executor {
+            Executor::Slurm(s) => s.poll,
+            Executor::Local { .. } => std::time::Duration::from_secs(1),
+        };
+        interrupted = slurm::wait(&submitted, poll, false, &interrupt, &mut |ev| {
+            if let Event::Finished(i, o) = &ev
+                && let Some(spec) = specs[*i]
+            {
+                // Collected, failed or not: a failed one has its row and is run again by the
+                // next command, as on any resume.
+                if matches!(o, Outcome::Done(_) | Outcome::Failed { .. }) {
+                    done.insert(key_of(&spec));
+                }
+                fold.event(spec, ev);
+            } else if let Event::Interrupt(_) = ev {
+                fold.stopping = true;
+            }
+        });
+        fold.pb.finish_and_clear();
+    }
+
     let todo: Vec<RunSpec> = all_runs
         .iter()
         .copied()
-        .filter(|r| {
-            !existing
-                .as_ref()
-                .is_some_and(|e| e.done.contains(&(plan.combos[r.combo].clone(), r.seed)))
-        })
+        .filter(|r| !done.contains(&key_of(r)))
         .collect();
     let jobs: Vec<Job> = todo
         .iter()
@@ -126,38 +224,122 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
         })
         .collect();
 
-    std::fs::create_dir_all(&out)
-        .map_err(|e| SwarmError::User(format!("cannot create {}: {e}", out.display())))?;
-    let mut csv = SweepCsv::open(&csv_path, &plan.keys, existing.as_ref().map(|e| &e.table))?;
-    let pb = progress_bar(jobs.len() as u64);
-    if !pb.is_hidden() {
-        pb.println(format!(
-            "sweep: {} runs ({} combinations x {} seeds); {} done already, {} to run, {} at a time, {}",
+    let command = command_line(&out, args.out.is_none());
+    if !interrupted && !collect_only && !jobs.is_empty() {
+        fold.pb = progress_bar(jobs.len() as u64);
+        fold.say(format!(
+            "sweep: {} runs ({} combinations x {} seeds); {} done already, {} to run, {}, {}",
             all_runs.len(),
             plan.combos.len(),
             plan.seeds.len(),
             all_runs.len() - todo.len(),
             todo.len(),
-            args.pool.jobs.min(todo.len().max(1) as u64),
+            executor.describe(todo.len()),
             mode(args.pool.in_process),
         ));
+        if args.detach {
+            let Executor::Slurm(s) = &executor else {
+                unreachable!("checked above")
+            };
+            let (arrays, index) = slurm::prepare_and_submit(&jobs, &opts, s, &mut |ev| {
+                if let Event::Finished(i, _) = &ev {
+                    fold.event(todo[*i], ev);
+                }
+            });
+            write_detached_command(&out)?;
+            let ids: Vec<&str> = arrays.iter().map(|a| a.job_id.as_str()).collect();
+            fold.pb.finish_and_clear();
+            fold.csv.finish()?;
+            println!("{}", out.display());
+            if !ids.is_empty() {
+                eprintln!(
+                    "submitted {} runs as Slurm job {}; gather them with: swarm sweep --collect {}",
+                    index.len(),
+                    ids.join(", "),
+                    out.display()
+                );
+            }
+            return fold.result(all_runs.len(), &csv_path);
+        }
+        interrupted = runner::run_all(&jobs, &opts, interrupt, |ev| match ev {
+            Event::Finished(i, _) => fold.event(todo[i], ev),
+            ev => fold.interrupt(ev),
+        });
+        fold.pb.finish_and_clear();
+    } else if collect_only && !todo.is_empty() && !interrupted {
+        eprintln!(
+            "{} runs of this sweep were not submitted (or failed); the sweep's command runs them: {command}",
+            todo.len()
+        );
+    }
+    fold.csv.finish()?;
+    if !fold.csv.ignored.is_empty() {
+        eprintln!(
+            "warning: metrics missing from sweep.csv's columns were left out: {}",
+            fold.csv
+                .ignored
+                .iter()
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
     }
 
-    let opts = PoolOptions {
-        swarm: std::env::current_exe()
-            .map_err(|e| anyhow::anyhow!("cannot locate the swarm executable: {e}"))?,
-        in_process: args.pool.in_process,
-        jobs: args.pool.jobs as usize,
-    };
-    let mut failures: Vec<String> = Vec::new();
-    let mut stopped_from_outside: Vec<String> = Vec::new();
-    let mut write_error: Option<anyhow::Error> = None;
-    let mut stopping = false;
-    let interrupted = runner::run_all(&jobs, &opts, interrupt, |ev| match ev {
-        Event::Interrupt(n) => {
-            stopping = true;
-            pb.suspend(|| {
-                if n == 1 {
+    let finished = write_reports(&out, &plan, &base, args, &command, &all_runs)?;
+    println!("{}", out.display());
+
+    if let Some(e) = fold.write_error.take() {
+        return Err(SwarmError::Internal(e.context("writing the sweep")));
+    }
+    if interrupted {
+        let resume = if submitted.is_empty() {
+            command
+        } else {
+            format!("{command} (runs still queued in Slurm are waited for, not run again)")
+        };
+        return Err(SwarmError::Interrupted(format!(
+            "sweep interrupted: {finished} of {} runs finished; resume with: {resume}",
+            all_runs.len()
+        )));
+    }
+    fold.result(all_runs.len(), &csv_path)
+}
+
+/// Folds finished runs into `sweep.csv` and keeps what the end of the sweep reports.
+struct Fold<'a> {
+    plan: &'a Plan,
+    out: &'a Path,
+    csv: &'a mut SweepCsv,
+    pb: ProgressBar,
+    /// `runs/<dir>: reason` of each failed run.
+    failures: Vec<String>,
+    /// Runs a signal from outside stopped (not rows).
+    stopped_from_outside: Vec<String>,
+    write_error: Option<anyhow::Error>,
+    /// Ctrl-C arrived: an interrupted run is the sweep's doing.
+    stopping: bool,
+    /// The runs go to Slurm: Ctrl-C cancels them there.
+    slurm: bool,
+}
+
+impl Fold<'_> {
+    fn say(&self, line: String) {
+        if !self.pb.is_hidden() {
+            self.pb.println(line);
+        }
+    }
+
+    fn interrupt(&mut self, ev: Event) {
+        if let Event::Interrupt(n) = ev {
+            self.stopping = true;
+            let slurm = self.slurm;
+            self.pb.suspend(|| {
+                if slurm && n == 1 {
+                    eprintln!(
+                        "stopping the sweep: cancelling its Slurm jobs; finished runs are kept \
+                         (Ctrl-C again to stop waiting for the cancelled ones)"
+                    );
+                } else if n == 1 {
                     eprintln!(
                         "stopping the sweep: no new runs; running ones stop after their current \
                          tick (Ctrl-C again to kill them)"
@@ -167,88 +349,175 @@ pub fn sweep(args: &SweepArgs, interrupt: crossbeam_channel::Receiver<()>) -> Sw
                 }
             });
         }
-        Event::Finished(i, outcome) => {
-            let spec = todo[i];
-            let rel = format!("runs/{}", plan.dir_name(spec));
-            let row = |metrics| Row {
-                values: plan.combos[spec.combo].clone(),
-                seed: spec.seed,
-                metrics,
-                run_dir: rel.clone(),
-            };
-            let pushed = match outcome {
-                Outcome::Done(m) => {
-                    pb.inc(1);
-                    csv.push(row(table::flatten(&m)))
-                }
-                Outcome::Failed { metrics, reason } => {
-                    pb.inc(1);
-                    pb.suspend(|| eprintln!("warning: run {rel} failed: {reason}"));
-                    failures.push(format!("{rel}: {reason}"));
-                    let mut flat = metrics.map(|m| table::flatten(&m)).unwrap_or_default();
-                    flat.insert(FAILED.into(), "true".into());
-                    csv.push(row(flat))
-                }
-                Outcome::Interrupted => {
-                    // Not a row: its directory goes, and resume runs it again.
-                    if !stopping {
-                        stopped_from_outside.push(rel.clone());
-                    }
-                    std::fs::remove_dir_all(out.join(&rel)).map_err(anyhow::Error::from)
-                }
-                Outcome::NotStarted => Ok(()),
-            };
-            if let Err(e) = pushed
-                && write_error.is_none()
-            {
-                write_error = Some(e);
+    }
+
+    fn event(&mut self, spec: RunSpec, ev: Event) {
+        let Event::Finished(_, outcome) = ev else {
+            return self.interrupt(ev);
+        };
+        let rel = format!("runs/{}", self.plan.dir_name(spec));
+        let row = |metrics| Row {
+            values: self.plan.combos[spec.combo].clone(),
+            seed: spec.seed,
+            metrics,
+            run_dir: rel.clone(),
+        };
+        let pushed = match outcome {
+            Outcome::Done(m) => {
+                self.pb.inc(1);
+                self.csv.push(row(table::flatten(&m)))
             }
+            Outcome::Failed { metrics, reason } => {
+                self.pb.inc(1);
+                self.pb
+                    .suspend(|| eprintln!("warning: run {rel} failed: {reason}"));
+                self.failures.push(format!("{rel}: {reason}"));
+                let mut flat = metrics.map(|m| table::flatten(&m)).unwrap_or_default();
+                flat.insert(FAILED.into(), "true".into());
+                self.csv.push(row(flat))
+            }
+            Outcome::Interrupted => {
+                // Not a row: its directory goes, and resume runs it again.
+                if !self.stopping {
+                    self.stopped_from_outside.push(rel.clone());
+                }
+                std::fs::remove_dir_all(self.out.join(&rel)).map_err(anyhow::Error::from)
+            }
+            Outcome::NotStarted => Ok(()),
+        };
+        if let Err(e) = pushed
+            && self.write_error.is_none()
+        {
+            self.write_error = Some(e);
         }
-    });
-    pb.finish_and_clear();
-    csv.finish()?;
-    if !csv.ignored.is_empty() {
-        eprintln!(
-            "warning: metrics missing from sweep.csv's columns were left out: {}",
-            csv.ignored.iter().cloned().collect::<Vec<_>>().join(", ")
-        );
     }
 
-    let command = command_line(&out, args.out.is_none());
-    let finished = write_reports(&out, &plan, &base, args, &command, &all_runs)?;
-    println!("{}", out.display());
+    /// Exit 1 when a run failed or was stopped from outside, naming the first.
+    fn result(&mut self, runs: usize, csv_path: &Path) -> SwarmResult<()> {
+        if let Some(e) = self.write_error.take() {
+            return Err(SwarmError::Internal(e.context("writing the sweep")));
+        }
+        if !self.failures.is_empty() {
+            return Err(SwarmError::Internal(anyhow::anyhow!(
+                "{} of {} runs failed (rows with failed=true in {}; the same command runs them again); first: {}",
+                self.failures.len(),
+                runs,
+                csv_path.display(),
+                self.failures[0]
+            )));
+        }
+        if !self.stopped_from_outside.is_empty() {
+            return Err(SwarmError::Internal(anyhow::anyhow!(
+                "{} runs were stopped by a signal from outside the sweep and are not in sweep.csv \
+                 (first: {}); the same command runs them again",
+                self.stopped_from_outside.len(),
+                self.stopped_from_outside[0]
+            )));
+        }
+        Ok(())
+    }
+}
 
-    if let Some(e) = write_error {
-        return Err(SwarmError::Internal(e.context("writing the sweep")));
-    }
-    if interrupted {
-        return Err(SwarmError::Interrupted(format!(
-            "sweep interrupted: {finished} of {} runs finished; resume with: {command}",
-            all_runs.len()
-        )));
-    }
-    if !failures.is_empty() {
-        return Err(SwarmError::Internal(anyhow::anyhow!(
-            "{} of {} runs failed (rows with failed=true in {}; the same command runs them again); first: {}",
-            failures.len(),
-            all_runs.len(),
-            csv_path.display(),
-            failures[0]
-        )));
-    }
-    if !stopped_from_outside.is_empty() {
-        return Err(SwarmError::Internal(anyhow::anyhow!(
-            "{} runs were stopped by a signal from outside the sweep and are not in sweep.csv \
-             (first: {}); the same command runs them again",
-            stopped_from_outside.len(),
-            stopped_from_outside[0]
-        )));
+/// Runs an earlier invocation submitted to Slurm must be runs of this command, with its
+/// configs: otherwise their rows would mix two sweeps.
+fn check_submitted(
+    arrays: &[slurm::Array],
+    spec_of_dir: &BTreeMap<String, RunSpec>,
+    configs: &[Config],
+    out: &Path,
+) -> SwarmResult<()> {
+    for run in arrays.iter().flat_map(|a| &a.runs) {
+        let name = run
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let Some(spec) = spec_of_dir.get(&name) else {
+            return Err(SwarmError::User(format!(
+                "{}: Slurm runs of another sweep command are still to collect ({} is not a run of \
+                 this one); gather them with `swarm sweep --collect {}` or give another --out",
+                out.display(),
+                run.display(),
+                out.display()
+            )));
+        };
+        let mut expected = configs[spec.combo].clone();
+        expected.scenario.seed = spec.seed;
+        check_same_config(run, &expected, &out.join(slurm::SLURM_DIR))?;
     }
     Ok(())
 }
 
-/// `--out` must be new, empty, or a sweep directory (it has `sweep.csv`, or only `runs/` when
-/// no run had finished yet): the sweep replaces its `plots/` and run directories.
+/// Keeps the detached sweep's command (as it would resume, without --detach) for `--collect`.
+fn write_detached_command(out: &Path) -> SwarmResult<()> {
+    let argv: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| a != "--detach")
+        .collect();
+    let cwd = std::env::current_dir()?;
+    let text = serde_json::to_string_pretty(&Detached {
+        cwd: cwd.display().to_string(),
+        argv,
+    })
+    .map_err(anyhow::Error::from)?;
+    swarmrt_scenario::safe_fs::write_replace_nofollow(
+        &out.join(slurm::SLURM_DIR).join(DETACHED_COMMAND),
+        text,
+    )?;
+    Ok(())
+}
+
+/// What `--detach` keeps for `--collect`: the command and the directory it was given in.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Detached {
+    cwd: String,
+    argv: Vec<String>,
+}
+
+/// The sweep command a detached sweep in `dir` was started with, to collect it.
+fn detached_command(dir: &Path) -> SwarmResult<SweepArgs> {
+    let path = dir.join(slurm::SLURM_DIR).join(DETACHED_COMMAND);
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        SwarmError::User(format!(
+            "--collect {}: no detached sweep there ({}: {e})",
+            dir.display(),
+            path.display()
+        ))
+    })?;
+    let detached: Detached = serde_json::from_str(&text)
+        .map_err(|e| SwarmError::User(format!("{}: not a sweep command: {e}", path.display())))?;
+    let dir = std::path::absolute(dir)?;
+    // Relative paths of the command (its config, robot programs) are the submitter's.
+    std::env::set_current_dir(&detached.cwd).map_err(|e| {
+        SwarmError::User(format!(
+            "{}: the sweep was submitted from {}, which is gone: {e}",
+            path.display(),
+            detached.cwd
+        ))
+    })?;
+    let cli =
+        crate::cli::Cli::try_parse_from(std::iter::once("swarm".to_string()).chain(detached.argv))
+            .map_err(|e| {
+                SwarmError::User(format!(
+                    "{}: not a sweep command: {}",
+                    path.display(),
+                    e.to_string().lines().next().unwrap_or("")
+                ))
+            })?;
+    match cli.command {
+        crate::cli::Cmd::Sweep(mut args) => {
+            args.detach = false;
+            args.out = Some(dir);
+            Ok(args)
+        }
+        _ => Err(SwarmError::User(format!(
+            "{}: not a sweep command",
+            path.display()
+        ))),
+    }
+}
+
+/// `--out` must be new, empty, or a sweep directory (it has `sweep.csv`, or only `runs/` and
+/// `slurm/` when no run had finished yet): the sweep replaces its `plots/` and run directories.
 fn check_out_dir(out: &Path) -> SwarmResult<()> {
     let Ok(entries) = std::fs::read_dir(out) else {
         if out.exists() {
@@ -263,7 +532,9 @@ fn check_out_dir(out: &Path) -> SwarmResult<()> {
         .flatten()
         .map(|e| e.file_name().to_string_lossy().into_owned())
         .collect();
-    if names.iter().any(|n| n == "sweep.csv") || names.iter().all(|n| n == "runs") {
+    if names.iter().any(|n| n == "sweep.csv")
+        || names.iter().all(|n| n == "runs" || n == slurm::SLURM_DIR)
+    {
         return Ok(());
     }
     Err(SwarmError::User(format!(

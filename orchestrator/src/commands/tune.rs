@@ -74,6 +74,7 @@ fn run_rel(k: u64) -> String {
 /// Runs the tune.
 pub fn tune(args: &TuneArgs, interrupt: crossbeam_channel::Receiver<()>) -> SwarmResult<()> {
     let tune = check(args)?;
+    let executor = crate::sweep::executor::resolve(&args.pool)?;
     let out = tune.out.clone();
     let cache = open_out(&out, &tune)?;
     std::fs::create_dir_all(&out)
@@ -98,13 +99,13 @@ pub fn tune(args: &TuneArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
     let pb = progress_bar(total - cached.min(total));
     if !pb.is_hidden() {
         pb.println(format!(
-            "tune: {} iterations x {} evaluations ({} particles); {} done already, {} to run, {} at a time, {}",
+            "tune: {} iterations x {} evaluations ({} particles); {} done already, {} to run, {}, {}",
             args.iterations,
             e,
             s.particles,
             cached,
             total - cached.min(total),
-            args.pool.jobs,
+            executor.describe(e as usize),
             mode(args.pool.in_process),
         ));
     }
@@ -122,7 +123,8 @@ pub fn tune(args: &TuneArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
         swarm: std::env::current_exe()
             .map_err(|e| anyhow::anyhow!("cannot locate the swarm executable: {e}"))?,
         in_process: args.pool.in_process,
-        jobs: args.pool.jobs as usize,
+        executor,
+        state_dir: out.clone(),
     };
     let mut history = History {
         scenario: tune.scenario.clone(),

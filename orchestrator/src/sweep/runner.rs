@@ -19,11 +19,12 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use crossbeam_channel::{Receiver, Sender};
 
+use super::executor::Executor;
 use crate::processes::child_command;
 use crate::run_dir;
 
 /// Lines of a failed run's stderr kept for the report.
-const STDERR_TAIL: usize = 12;
+pub(crate) const STDERR_TAIL: usize = 12;
 
 /// One run to do.
 #[derive(Debug, Clone)]
@@ -68,8 +69,10 @@ pub struct PoolOptions {
     pub swarm: PathBuf,
     /// Pass `--in-process` to every run.
     pub in_process: bool,
-    /// Runs at once (at least 1).
-    pub jobs: usize,
+    /// Where the runs are made.
+    pub executor: Executor,
+    /// The sweep's (or tune's) directory: an executor keeps its own files under it.
+    pub state_dir: PathBuf,
 }
 
 /// Shared between the workers and the Ctrl-C forwarder.
@@ -81,11 +84,25 @@ struct Shared {
     active: Mutex<BTreeMap<i32, bool>>,
 }
 
-/// Runs `jobs` and hands every [`Event`] to `on_event` on the calling thread. Stops launching
-/// on Ctrl-C (`interrupt`); returns whether it was interrupted.
+/// Runs `jobs` with the options' executor and hands every [`Event`] to `on_event` on the
+/// calling thread. Stops launching on Ctrl-C (`interrupt`); returns whether it was interrupted.
 pub fn run_all(
     jobs: &[Job],
     opts: &PoolOptions,
+    interrupt: Receiver<()>,
+    on_event: impl FnMut(Event),
+) -> bool {
+    match &opts.executor {
+        Executor::Local { jobs: n } => run_local(jobs, opts, *n, interrupt, on_event),
+        Executor::Slurm(slurm) => super::slurm::run_all(jobs, opts, slurm, interrupt, on_event),
+    }
+}
+
+/// The local pool: `workers` child `swarm run`s at a time.
+fn run_local(
+    jobs: &[Job],
+    opts: &PoolOptions,
+    workers: usize,
     interrupt: Receiver<()>,
     mut on_event: impl FnMut(Event),
 ) -> bool {
@@ -94,7 +111,7 @@ pub fn run_all(
         stop: AtomicBool::new(false),
         active: Mutex::new(BTreeMap::new()),
     };
-    let workers = opts.jobs.clamp(1, jobs.len().max(1));
+    let workers = workers.clamp(1, jobs.len().max(1));
     let (tx, rx) = crossbeam_channel::unbounded::<Option<Event>>();
     let (quit_tx, quit_rx) = crossbeam_channel::bounded::<()>(0);
     std::thread::scope(|s| {
@@ -247,7 +264,7 @@ fn run_one(job: &Job, opts: &PoolOptions, shared: &Shared) -> Outcome {
 
 /// Removes what an earlier, unfinished attempt left and writes the resolved config, under the
 /// directory's lock: a directory another run is using is refused, not cleared.
-fn prepare(dir: &Path, config: &Path, toml: &str) -> anyhow::Result<()> {
+pub(crate) fn prepare(dir: &Path, config: &Path, toml: &str) -> anyhow::Result<()> {
     let _lock = run_dir::lock(dir).map_err(|e| anyhow::anyhow!("{e}"))?;
     for entry in std::fs::read_dir(dir)? {
         let entry = entry?;
@@ -287,7 +304,7 @@ fn wait_without_reaping(pid: i32) {
 
 /// Sorts a finished child into an outcome from its `metrics.json`, exit status and whether
 /// the sweep forwarded Ctrl-C to it.
-fn classify(
+pub(crate) fn classify(
     dir: &Path,
     status: std::io::Result<ExitStatus>,
     signalled: bool,
