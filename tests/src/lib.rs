@@ -6,6 +6,7 @@ pub mod browser;
 pub mod c_robot;
 pub mod lab;
 pub mod python;
+pub mod slurm;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -368,4 +369,20 @@ pub fn assert_same_records(a: &Path, b: &Path, what: &str) {
             b.display()
         );
     }
+}
+
+/// Live processes whose command line mentions `needle`.
+pub fn processes_mentioning(needle: &str) -> Vec<(i32, String)> {
+    let mut found = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<i32>() else {
+            continue;
+        };
+        let cmd = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+        let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
+        if cmd.contains(needle) && alive(pid) {
+            found.push((pid, cmd));
+        }
+    }
+    found
 }

@@ -141,22 +141,6 @@ fn svg_texts(svg: &str) -> Vec<String> {
 
 const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
 
-/// Live processes whose command line mentions `needle`.
-fn processes_mentioning(needle: &str) -> Vec<(i32, String)> {
-    let mut found = Vec::new();
-    for e in std::fs::read_dir("/proc").unwrap().flatten() {
-        let Ok(pid) = e.file_name().to_string_lossy().parse::<i32>() else {
-            continue;
-        };
-        let cmd = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
-        let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
-        if cmd.contains(needle) && alive(pid) {
-            found.push((pid, cmd));
-        }
-    }
-    found
-}
-
 /// Panics (with its stderr) if `child` has already exited.
 fn assert_running(child: &mut std::process::Child) {
     if let Some(status) = child.try_wait().unwrap() {

@@ -125,7 +125,13 @@ fn sweep_with(
     let csv_path = out.join("sweep.csv");
     check_out_dir(&out)?;
     let existing = if csv_path.exists() {
-        Some(read_existing(&csv_path, &plan, &configs, &out)?)
+        Some(read_existing(
+            &csv_path,
+            &plan,
+            &configs,
+            &out,
+            collect_only,
+        )?)
     } else {
         None
     };
@@ -571,12 +577,14 @@ pub(crate) fn progress_bar(total: u64) -> ProgressBar {
 
 /// Reads an existing `sweep.csv` for resume: its varied keys must be this command's, and
 /// every finished run of this plan must have been made with the config this command would use.
-/// Failed runs of this plan, duplicates and cut lines are dropped (to run again).
+/// Failed runs of this plan, duplicates and cut lines are dropped (to run again); with
+/// `keep_failed` (`--collect`, which runs nothing) failed rows stay.
 fn read_existing(
     path: &Path,
     plan: &Plan,
     configs: &[Config],
     out: &Path,
+    keep_failed: bool,
 ) -> SwarmResult<Existing> {
     let (table, skipped) = Table::read(path).map_err(SwarmError::User)?;
     let k = plan.keys.len();
@@ -604,11 +612,11 @@ fn read_existing(
         let combo = plan.combos.iter().position(|c| c[..] == row[..k]);
         let planned = combo.is_some() && plan.seeds.contains(&seed);
         let failed = failed_col.is_some_and(|c| row[c] != "false");
-        if seen.contains(&key) || (planned && failed) {
+        if seen.contains(&key) || (planned && failed && !keep_failed) {
             dropped += 1;
             continue;
         }
-        if let Some(c) = combo.filter(|_| planned) {
+        if let Some(c) = combo.filter(|_| planned && !failed) {
             let mut expected = configs[c].clone();
             expected.scenario.seed = seed;
             check_same_config(&out.join(&row[dir_col]), &expected, path)?;

@@ -208,7 +208,9 @@ fn submit(runs: &[PathBuf], opts: &PoolOptions, slurm: &SlurmOptions) -> Result<
 }
 
 /// The task's shell: run the task's directory with `swarm run`, then record its exit code
-/// (written aside and renamed, so a reader never sees half a number).
+/// (written aside and renamed, so a reader never sees half a number). The run goes to the
+/// background and the shell waits, forwarding Slurm's SIGTERM (scancel, a time limit): were
+/// the shell killed first, the run would leave the task's process tree and outlive the task.
 fn task_script(dir: &Path, swarm: &Path, in_process: bool) -> String {
     let q = |p: &Path| shell_word(&p.display().to_string());
     format!(
@@ -216,8 +218,12 @@ fn task_script(dir: &Path, swarm: &Path, in_process: bool) -> String {
          # swarmrt: one run of a sweep per task of this array (orchestrator/src/sweep/slurm.rs).\n\
          t=\"${{SLURM_ARRAY_TASK_ID:?not a task of a job array}}\"\n\
          run=$(sed -n \"$((t + 1))p\" {runs})\n\
-         {swarm} run \"$run/config.toml\" --out \"$run\" --force{mode} > /dev/null\n\
+         {swarm} run \"$run/config.toml\" --out \"$run\" --force{mode} > /dev/null &\n\
+         pid=$!\n\
+         trap 'kill -TERM \"$pid\" 2>/dev/null' TERM INT\n\
+         wait \"$pid\"\n\
          code=$?\n\
+         while kill -0 \"$pid\" 2>/dev/null; do wait \"$pid\"; code=$?; done\n\
          echo \"$code\" > {dir}/\"$t\".exit.part && mv {dir}/\"$t\".exit.part {dir}/\"$t\".exit\n\
          exit \"$code\"\n",
         runs = q(&dir.join("runs.txt")),
@@ -570,7 +576,7 @@ mod tests {
         );
         assert!(s.contains("sed -n \"$((t + 1))p\" '/s w/it'\\''s/array-0/runs.txt'"));
         assert!(s.contains(
-            "'/bin/swarm' run \"$run/config.toml\" --out \"$run\" --force --in-process > /dev/null"
+            "'/bin/swarm' run \"$run/config.toml\" --out \"$run\" --force --in-process > /dev/null &"
         ));
         assert!(s.contains(
             "mv '/s w/it'\\''s/array-0'/\"$t\".exit.part '/s w/it'\\''s/array-0'/\"$t\".exit"
