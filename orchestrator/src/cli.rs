@@ -272,7 +272,7 @@ pub struct PoolArgs {
     #[arg(long, value_enum)]
     pub executor: Option<ExecutorKind>,
     /// A TOML file with an `[executor]` section (kind, partition, time, mem, sbatch_args,
-    /// jobs, poll_seconds); the command line's flags win over it.
+    /// jobs, runs_per_task, poll_seconds); the command line's flags win over it.
     #[arg(long, value_name = "FILE")]
     pub executor_config: Option<PathBuf>,
     /// Slurm partition of the runs (`sbatch --partition`).
@@ -292,6 +292,10 @@ pub struct PoolArgs {
         help_heading = "Slurm"
     )]
     pub sbatch_args: Vec<String>,
+    /// Runs one Slurm task makes one after the other [default: 1]: many short runs pay
+    /// Slurm's start-up of a task once per N runs.
+    #[arg(long, value_name = "N", help_heading = "Slurm")]
+    pub runs_per_task: Option<u64>,
 }
 
 /// Where `swarm sweep` and `swarm tune` make their runs.

@@ -94,7 +94,11 @@ fn a_sweep_and_a_tune_through_slurm_equal_local_ones() {
     };
     // Processes mode: every task runs a world and nine robot processes on the node.
     assert_ok(&sweep(&local, &["--jobs", "2"]));
-    assert_ok(&sweep(&cluster, &["--executor", "slurm"]));
+    // Three runs per task: tasks of three and of one run.
+    assert_ok(&sweep(
+        &cluster,
+        &["--executor", "slurm", "--runs-per-task", "3"],
+    ));
     let (a, b) = (rows(&local), rows(&cluster));
     assert_eq!(a.len(), 4);
     assert_eq!(a, b, "sweep.csv rows differ between local and Slurm");
@@ -110,17 +114,24 @@ fn a_sweep_and_a_tune_through_slurm_equal_local_ones() {
     let array = cluster.join("slurm/array-0");
     let job = std::fs::read_to_string(array.join("job_id")).unwrap();
     let tasks = lab.tasks();
-    for t in 0..4 {
+    for run in 0..4 {
         assert_eq!(
-            std::fs::read_to_string(array.join(format!("{t}.exit"))).unwrap(),
+            std::fs::read_to_string(array.join(format!("{run}.exit"))).unwrap(),
             "0\n"
         );
+    }
+    for t in 0..2 {
         let id = format!("{}_{t}", job.trim());
         assert!(
             tasks.iter().any(|(i, s)| *i == id && s == "COMPLETED"),
             "{id} in {tasks:?}"
         );
     }
+    let id = format!("{}_2", job.trim());
+    assert!(
+        !tasks.iter().any(|(i, _)| *i == id),
+        "two tasks only: {tasks:?}"
+    );
     // Run again: nothing is missing, nothing is submitted.
     assert_ok(&sweep(&cluster, &["--executor", "slurm"]));
     assert!(!cluster.join("slurm/array-1").exists());

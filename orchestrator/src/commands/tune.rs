@@ -88,6 +88,17 @@ pub fn tune(args: &TuneArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
         )?;
     }
     let mut csv = TuneCsv::open(&out.join("tune.csv"), &tune.params)?;
+    // Only a tune that was killed leaves Slurm arrays behind (Ctrl-C cancels them): their
+    // evaluations are not in tune.csv and run again, so the old tasks go first.
+    let stale = crate::sweep::slurm::pending_arrays(&out)?;
+    if !stale.is_empty() {
+        let ids: Vec<&str> = stale.iter().map(|a| a.job_id.as_str()).collect();
+        eprintln!(
+            "cancelling Slurm job(s) {} an earlier run of this tune left behind",
+            ids.join(", ")
+        );
+        crate::sweep::slurm::abandon(&stale, std::time::Duration::from_secs(1));
+    }
 
     let s = &tune.settings;
     let e = s.evaluations;

@@ -13,6 +13,9 @@ use crate::error::{SwarmError, SwarmResult};
 /// Most local runs at once: each is a thread of the pool and a child process.
 pub const MAX_LOCAL_JOBS: u64 = 256;
 
+/// Most runs one Slurm task makes.
+pub const MAX_RUNS_PER_TASK: u64 = 10_000;
+
 /// Where the runs go.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Executor {
@@ -38,6 +41,9 @@ pub struct SlurmOptions {
     pub sbatch_args: Vec<String>,
     /// Tasks of one array running at once (`--array=0-N%jobs`); `None`: the cluster decides.
     pub jobs: Option<u64>,
+    /// Runs one task makes, one after the other: Slurm's cost of starting a task (about 0.6 s
+    /// on a one-node cluster, docs/cluster.md) is paid once for them.
+    pub runs_per_task: usize,
     /// How often the queue is asked how the tasks are doing.
     pub poll: Duration,
 }
@@ -53,6 +59,7 @@ struct ExecutorSection {
     #[serde(default)]
     sbatch_args: Vec<String>,
     jobs: Option<u64>,
+    runs_per_task: Option<u64>,
     poll_seconds: Option<f64>,
 }
 
@@ -82,6 +89,7 @@ pub fn resolve(pool: &PoolArgs) -> SwarmResult<Executor> {
                 ("--time", pool.time.is_some()),
                 ("--mem", pool.mem.is_some()),
                 ("--sbatch-arg", !pool.sbatch_args.is_empty()),
+                ("--runs-per-task", pool.runs_per_task.is_some()),
             ]
             .into_iter()
             .find(|(_, given)| *given);
@@ -110,6 +118,12 @@ pub fn resolve(pool: &PoolArgs) -> SwarmResult<Executor> {
                         .map_or("--executor-config".into(), |p| p.display().to_string())
                 )));
             }
+            let per_task = pool.runs_per_task.or(file.runs_per_task).unwrap_or(1);
+            if !(1..=MAX_RUNS_PER_TASK).contains(&per_task) {
+                return Err(SwarmError::User(format!(
+                    "runs per task {per_task} is out of range; expected 1 to {MAX_RUNS_PER_TASK}"
+                )));
+            }
             let mut sbatch_args = file.sbatch_args;
             sbatch_args.extend(pool.sbatch_args.iter().cloned());
             Ok(Executor::Slurm(SlurmOptions {
@@ -118,6 +132,7 @@ pub fn resolve(pool: &PoolArgs) -> SwarmResult<Executor> {
                 mem: pool.mem.clone().or(file.mem),
                 sbatch_args,
                 jobs,
+                runs_per_task: per_task as usize,
                 poll: Duration::from_secs_f64(poll),
             }))
         }
@@ -157,10 +172,16 @@ impl Executor {
     pub fn describe(&self, runs: usize) -> String {
         match self {
             Executor::Local { jobs } => format!("{} at a time", (*jobs).min(runs.max(1))),
-            Executor::Slurm(s) => match s.jobs {
-                Some(j) => format!("as a Slurm job array, {j} at a time"),
-                None => "as a Slurm job array".into(),
-            },
+            Executor::Slurm(s) => {
+                let mut d = String::from("as a Slurm job array");
+                if s.runs_per_task > 1 {
+                    d.push_str(&format!(", {} runs per task", s.runs_per_task));
+                }
+                if let Some(j) = s.jobs {
+                    d.push_str(&format!(", {j} tasks at a time"));
+                }
+                d
+            }
         }
     }
 }
@@ -187,7 +208,7 @@ mod tests {
         let f = dir.path().join("cluster.toml");
         std::fs::write(
             &f,
-            "[executor]\nkind = \"slurm\"\npartition = \"a\"\ntime = \"1:00\"\nsbatch_args = [\"--qos=x\"]\njobs = 4\n",
+            "[executor]\nkind = \"slurm\"\npartition = \"a\"\ntime = \"1:00\"\nsbatch_args = [\"--qos=x\"]\njobs = 4\nruns_per_task = 5\n",
         )
         .unwrap();
         let fs = f.to_str().unwrap();
@@ -206,6 +227,7 @@ mod tests {
         assert_eq!(s.time.as_deref(), Some("1:00"));
         assert_eq!(s.sbatch_args, ["--qos=x", "--exclusive"]);
         assert_eq!(s.jobs, Some(4));
+        assert_eq!(s.runs_per_task, 5);
         // The command line's executor wins over the file's kind.
         assert_eq!(
             resolve(&pool(&["--executor-config", fs, "--executor", "local"])).unwrap(),
@@ -244,5 +266,9 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("expected 0.05 to 600"), "{e}");
+        let e = resolve(&pool(&["--executor", "slurm", "--runs-per-task", "0"]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("expected 1 to 10000"), "{e}");
     }
 }

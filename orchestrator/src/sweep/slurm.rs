@@ -1,14 +1,16 @@
 //! Runs a sweep's (or a tune iteration's) jobs as Slurm job arrays: one `sbatch --array`
-//! per batch of at most [`MAX_ARRAY`] runs, each task an ordinary `swarm run` of one prepared
-//! run directory, on a filesystem the nodes share.
+//! per batch of at most [`MAX_ARRAY`] tasks, each task ordinary `swarm run`s of one or more
+//! (`runs_per_task`) prepared run directories, one after the other, on a filesystem the
+//! nodes share.
 //!
-//! Why files rather than Slurm's accounting: a task writes its exit code next to its log when
-//! its `swarm run` ends, so a finished run is known from the shared filesystem alone, on
-//! clusters with or without `sacct`. The queue (`squeue --states=all`) is asked only to tell a
-//! task still waiting or running from one that ended without writing (cancelled, timed out,
+//! Why files rather than Slurm's accounting: a task writes each run's exit code next to its
+//! log when its `swarm run` ends, so a finished run is known from the shared filesystem alone,
+//! on clusters with or without `sacct`. The queue (`squeue --states=all`) is asked only to tell
+//! a task still waiting or running from one that ended without writing (cancelled, timed out,
 //! its node lost). Every array keeps its own directory under `<out>/slurm/array-<n>/`:
-//! `runs.txt` (the run directories, one per task), `run.sh`, `job_id`, a `<task>.log` and a
-//! `<task>.exit` per task, and `collected` once each of its tasks was reported.
+//! `runs.txt` (the run directories, run `i` on line `i + 1`), `per_task`, `run.sh`, `job_id`,
+//! a `<i>.log` and a `<i>.exit` per run, a `task-<t>.log` per task, and `collected` once each
+//! of its runs was reported.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -43,15 +45,17 @@ const ACTIVE: [&str; 13] = [
     "RESV_DEL_HOLD",
 ];
 
-/// One submitted array: its job id, its directory and the run directory of each task.
+/// One submitted array: its job id, its directory and its run directories.
 #[derive(Debug, Clone)]
 pub struct Array {
     /// Slurm's job id of the array.
     pub job_id: String,
     /// `<out>/slurm/array-<n>/`.
     pub dir: PathBuf,
-    /// Task `t` runs `runs[t]`.
+    /// Task `t` runs `runs[t * per_task ..][..per_task]`, in order.
     pub runs: Vec<PathBuf>,
+    /// Runs per task (at least 1).
+    pub per_task: usize,
 }
 
 /// Runs `jobs` through Slurm and hands every [`Event`] to `on_event`; on Ctrl-C cancels the
@@ -96,9 +100,10 @@ pub fn prepare_and_submit(
     }
     let mut arrays = Vec::new();
     let mut index = Vec::new();
-    for chunk in ready.chunks(MAX_ARRAY) {
+    let per_task = slurm.runs_per_task.max(1);
+    for chunk in ready.chunks(MAX_ARRAY * per_task) {
         let runs: Vec<PathBuf> = chunk.iter().map(|&i| absolute(&jobs[i].dir)).collect();
-        match submit(&runs, opts, slurm) {
+        match submit(&runs, per_task, opts, slurm) {
             Ok(array) => {
                 arrays.push(array);
                 index.extend_from_slice(chunk);
@@ -120,7 +125,12 @@ pub fn prepare_and_submit(
 }
 
 /// Writes one array's directory and submits it with `sbatch`.
-fn submit(runs: &[PathBuf], opts: &PoolOptions, slurm: &SlurmOptions) -> Result<Array, String> {
+fn submit(
+    runs: &[PathBuf],
+    per_task: usize,
+    opts: &PoolOptions,
+    slurm: &SlurmOptions,
+) -> Result<Array, String> {
     let root = absolute(&opts.state_dir.join(SLURM_DIR));
     let dir = new_array_dir(&root).map_err(|e| format!("cannot create {}: {e}", root.display()))?;
     let mut list = String::new();
@@ -139,9 +149,13 @@ fn submit(runs: &[PathBuf], opts: &PoolOptions, slurm: &SlurmOptions) -> Result<
             .map_err(|e| format!("cannot write {}: {e}", dir.join(name).display()))
     };
     write("runs.txt", &list)?;
-    write("run.sh", &task_script(&dir, &opts.swarm, opts.in_process))?;
+    write("per_task", &format!("{per_task}\n"))?;
+    write(
+        "run.sh",
+        &task_script(&dir, &opts.swarm, opts.in_process, per_task),
+    )?;
 
-    let mut array = format!("--array=0-{}", runs.len() - 1);
+    let mut array = format!("--array=0-{}", runs.len().div_ceil(per_task) - 1);
     if let Some(j) = slurm.jobs {
         array.push_str(&format!("%{j}"));
     }
@@ -149,7 +163,7 @@ fn submit(runs: &[PathBuf], opts: &PoolOptions, slurm: &SlurmOptions) -> Result<
     cmd.arg("--parsable")
         .arg(array)
         .arg("--job-name=swarm")
-        .arg(format!("--output={}/%a.log", dir.display()))
+        .arg(format!("--output={}/task-%a.log", dir.display()))
         .arg(format!(
             "--chdir={}",
             std::env::current_dir()
@@ -204,28 +218,39 @@ fn submit(runs: &[PathBuf], opts: &PoolOptions, slurm: &SlurmOptions) -> Result<
         job_id,
         dir,
         runs: runs.to_vec(),
+        per_task,
     })
 }
 
-/// The task's shell: run the task's directory with `swarm run`, then record its exit code
-/// (written aside and renamed, so a reader never sees half a number). The run goes to the
-/// background and the shell waits, forwarding Slurm's SIGTERM (scancel, a time limit): were
-/// the shell killed first, the run would leave the task's process tree and outlive the task.
-fn task_script(dir: &Path, swarm: &Path, in_process: bool) -> String {
+/// The task's shell: its runs one after the other with `swarm run`, each run's exit code
+/// recorded as it ends (written aside and renamed, so a reader never sees half a number). A
+/// run goes to the background and the shell waits, forwarding Slurm's SIGTERM (scancel, a time
+/// limit) and starting no further run: were the shell killed first, the run would leave the
+/// task's process tree and outlive the task.
+fn task_script(dir: &Path, swarm: &Path, in_process: bool, per_task: usize) -> String {
     let q = |p: &Path| shell_word(&p.display().to_string());
     format!(
         "#!/bin/sh\n\
-         # swarmrt: one run of a sweep per task of this array (orchestrator/src/sweep/slurm.rs).\n\
+         # swarmrt: {per_task} run(s) of a sweep per task of this array (orchestrator/src/sweep/slurm.rs).\n\
          t=\"${{SLURM_ARRAY_TASK_ID:?not a task of a job array}}\"\n\
-         run=$(sed -n \"$((t + 1))p\" {runs})\n\
-         {swarm} run \"$run/config.toml\" --out \"$run\" --force{mode} > /dev/null &\n\
-         pid=$!\n\
-         trap 'kill -TERM \"$pid\" 2>/dev/null' TERM INT\n\
-         wait \"$pid\"\n\
-         code=$?\n\
-         while kill -0 \"$pid\" 2>/dev/null; do wait \"$pid\"; code=$?; done\n\
-         echo \"$code\" > {dir}/\"$t\".exit.part && mv {dir}/\"$t\".exit.part {dir}/\"$t\".exit\n\
-         exit \"$code\"\n",
+         stop=\n\
+         pid=\n\
+         trap 'stop=1; [ -n \"$pid\" ] && kill -TERM \"$pid\" 2>/dev/null' TERM INT\n\
+         i=$((t * {per_task}))\n\
+         end=$((i + {per_task}))\n\
+         while [ \"$i\" -lt \"$end\" ] && [ -z \"$stop\" ]; do\n\
+         \x20 run=$(sed -n \"$((i + 1))p\" {runs})\n\
+         \x20 [ -n \"$run\" ] || break\n\
+         \x20 {swarm} run \"$run/config.toml\" --out \"$run\" --force{mode} > /dev/null 2> {dir}/\"$i\".log &\n\
+         \x20 pid=$!\n\
+         \x20 wait \"$pid\"\n\
+         \x20 code=$?\n\
+         \x20 while kill -0 \"$pid\" 2>/dev/null; do wait \"$pid\"; code=$?; done\n\
+         \x20 pid=\n\
+         \x20 echo \"$code\" > {dir}/\"$i\".exit.part && mv {dir}/\"$i\".exit.part {dir}/\"$i\".exit\n\
+         \x20 i=$((i + 1))\n\
+         done\n\
+         [ -z \"$stop\" ] || exit 143\n",
         runs = q(&dir.join("runs.txt")),
         swarm = q(swarm),
         mode = if in_process { " --in-process" } else { "" },
@@ -261,19 +286,35 @@ pub fn pending_arrays(out: &Path) -> std::io::Result<Vec<Array>> {
             .lines()
             .map(PathBuf::from)
             .collect();
+        let per_task = std::fs::read_to_string(dir.join("per_task"))
+            .ok()
+            .and_then(|t| t.trim().parse().ok())
+            .unwrap_or(1usize)
+            .max(1);
         arrays.push(Array {
             job_id: id.trim().to_string(),
             dir,
             runs,
+            per_task,
         });
     }
     Ok(arrays)
 }
 
-/// A task still to report.
+/// Cancels arrays an earlier, killed invocation left running and waits until their tasks have
+/// ended, so none of them still writes into a run directory that is about to be prepared again
+/// (a tune resumes by running its unfinished evaluations afresh).
+pub fn abandon(arrays: &[Array], poll: Duration) {
+    scancel(arrays);
+    let (_keep, never) = crossbeam_channel::bounded::<()>(0);
+    wait(arrays, poll, false, &never, &mut |_| {});
+}
+
+/// A run still to report.
 struct Waiting {
     array: usize,
-    task: usize,
+    /// The run's index in its array.
+    run: usize,
     /// Global index over all arrays' runs.
     index: usize,
     /// When the queue first showed it ended (or no longer knew it) without an exit file.
@@ -294,10 +335,10 @@ pub fn wait(
 ) -> bool {
     let mut waiting: Vec<Waiting> = Vec::new();
     for (a, array) in arrays.iter().enumerate() {
-        for task in 0..array.runs.len() {
+        for run in 0..array.runs.len() {
             waiting.push(Waiting {
                 array: a,
-                task,
+                run,
                 index: waiting.len(),
                 gone_since: None,
             });
@@ -351,19 +392,12 @@ pub fn wait(
         while i < waiting.len() {
             let w = &mut waiting[i];
             let array = &arrays[w.array];
-            let run = &array.runs[w.task];
+            let task = w.run / array.per_task;
             let state = states
                 .as_ref()
-                .map(|s| s.get(&(array.job_id.clone(), w.task)).cloned());
-            let outcome = if let Some(code) = exit_code(&array.dir, w.task) {
-                Some(finished(
-                    array,
-                    w.task,
-                    run,
-                    code,
-                    cancelled,
-                    state.flatten(),
-                ))
+                .map(|s| s.get(&(array.job_id.clone(), task)).cloned());
+            let outcome = if let Some(code) = exit_code(&array.dir, w.run) {
+                Some(finished(array, w.run, code, cancelled, state.flatten()))
             } else {
                 match state {
                     // The queue could not be read: nothing is known.
@@ -374,7 +408,7 @@ pub fn wait(
                     }
                     Some(s) => {
                         let since = *w.gone_since.get_or_insert(now);
-                        (now - since >= grace).then(|| vanished(array, w.task, s, cancelled))
+                        (now - since >= grace).then(|| vanished(array, w.run, s, cancelled))
                     }
                 }
             };
@@ -394,18 +428,12 @@ pub fn wait(
     interrupts > 0
 }
 
-/// The outcome of a task that wrote its exit code.
-fn finished(
-    array: &Array,
-    task: usize,
-    run: &Path,
-    code: i32,
-    cancelled: bool,
-    state: Option<String>,
-) -> Outcome {
-    let tail = log_tail(&array.dir, task);
+/// The outcome of run `i` of an array, which wrote its exit code.
+fn finished(array: &Array, i: usize, code: i32, cancelled: bool, state: Option<String>) -> Outcome {
+    let task = i / array.per_task;
+    let tail = log_tail(&array.dir, i);
     let status = Ok(ExitStatus::from_raw_code(code));
-    match runner::classify(run, status, cancelled, &tail) {
+    match runner::classify(&array.runs[i], status, cancelled, &tail) {
         // Stopped, but not by this sweep: someone cancelled the task (`scancel`).
         Outcome::Interrupted if !cancelled => Outcome::Failed {
             metrics: None,
@@ -419,17 +447,19 @@ fn finished(
     }
 }
 
-/// The outcome of a task the queue says ended (or no longer knows) without an exit code.
-fn vanished(array: &Array, task: usize, state: Option<String>, cancelled: bool) -> Outcome {
+/// The outcome of run `i`, whose task the queue says ended (or no longer knows) without the
+/// run's exit code.
+fn vanished(array: &Array, i: usize, state: Option<String>, cancelled: bool) -> Outcome {
     if cancelled {
         return Outcome::Interrupted;
     }
-    let log = array.dir.join(format!("{task}.log"));
+    let task = i / array.per_task;
+    let log = array.dir.join(format!("{i}.log"));
     let how = match state {
         Some(s) => format!("ended {s}"),
         None => "left the queue (cancelled, timed out, or its node failed)".into(),
     };
-    let said = log_tail(&array.dir, task)
+    let said = log_tail(&array.dir, i)
         .iter()
         .rev()
         .find(|l| !l.trim().is_empty())
@@ -500,18 +530,18 @@ fn scancel(arrays: &[Array]) {
     }
 }
 
-/// The exit code a task wrote, if it wrote one.
-fn exit_code(dir: &Path, task: usize) -> Option<i32> {
-    std::fs::read_to_string(dir.join(format!("{task}.exit")))
+/// The exit code run `i`'s task wrote for it, if it did.
+fn exit_code(dir: &Path, i: usize) -> Option<i32> {
+    std::fs::read_to_string(dir.join(format!("{i}.exit")))
         .ok()?
         .trim()
         .parse()
         .ok()
 }
 
-/// The last lines of a task's log (its `swarm run`'s stderr).
-fn log_tail(dir: &Path, task: usize) -> Vec<String> {
-    let text = std::fs::read_to_string(dir.join(format!("{task}.log"))).unwrap_or_default();
+/// The last lines of run `i`'s log (its `swarm run`'s stderr).
+fn log_tail(dir: &Path, i: usize) -> Vec<String> {
+    let text = std::fs::read_to_string(dir.join(format!("{i}.log"))).unwrap_or_default();
     let lines: Vec<&str> = text.lines().collect();
     lines[lines.len().saturating_sub(runner::STDERR_TAIL)..]
         .iter()
@@ -573,14 +603,48 @@ mod tests {
             Path::new("/s w/it's/array-0"),
             Path::new("/bin/swarm"),
             true,
+            3,
         );
-        assert!(s.contains("sed -n \"$((t + 1))p\" '/s w/it'\\''s/array-0/runs.txt'"));
+        assert!(s.contains("i=$((t * 3))\nend=$((i + 3))\n"));
+        assert!(s.contains("sed -n \"$((i + 1))p\" '/s w/it'\\''s/array-0/runs.txt'"));
         assert!(s.contains(
-            "'/bin/swarm' run \"$run/config.toml\" --out \"$run\" --force --in-process > /dev/null &"
+            "'/bin/swarm' run \"$run/config.toml\" --out \"$run\" --force --in-process > /dev/null 2> '/s w/it'\\''s/array-0'/\"$i\".log &"
         ));
         assert!(s.contains(
-            "mv '/s w/it'\\''s/array-0'/\"$t\".exit.part '/s w/it'\\''s/array-0'/\"$t\".exit"
+            "mv '/s w/it'\\''s/array-0'/\"$i\".exit.part '/s w/it'\\''s/array-0'/\"$i\".exit"
         ));
+    }
+
+    /// The script run by `sh` as Slurm would run task `t`, with a stand-in `swarm` that
+    /// records its arguments: each task runs its own runs, in order, and records each exit.
+    #[test]
+    fn each_task_runs_its_share_of_the_runs() {
+        let d = tempfile::tempdir().unwrap();
+        let fake = d.path().join("swarm");
+        std::fs::write(
+            &fake,
+            "#!/bin/sh\necho \"$4\" >> \"$(dirname \"$0\")/ran\"\ncase \"$4\" in *r3) exit 7;; esac\n",
+        )
+        .unwrap();
+        let mut perm = std::fs::metadata(&fake).unwrap().permissions();
+        std::os::unix::fs::PermissionsExt::set_mode(&mut perm, 0o755);
+        std::fs::set_permissions(&fake, perm).unwrap();
+        let runs: String = (0..5).map(|r| format!("/x/r{r}\n")).collect();
+        std::fs::write(d.path().join("runs.txt"), runs).unwrap();
+        let script = d.path().join("run.sh");
+        std::fs::write(&script, task_script(d.path(), &fake, false, 2)).unwrap();
+        for t in 0..3 {
+            let ok = Command::new("sh")
+                .arg(&script)
+                .env("SLURM_ARRAY_TASK_ID", t.to_string())
+                .status()
+                .unwrap();
+            assert!(ok.success() || t == 1, "task {t}");
+        }
+        let ran = std::fs::read_to_string(d.path().join("ran")).unwrap();
+        assert_eq!(ran, "/x/r0\n/x/r1\n/x/r2\n/x/r3\n/x/r4\n");
+        let codes: Vec<Option<i32>> = (0..6).map(|i| exit_code(d.path(), i)).collect();
+        assert_eq!(codes, [Some(0), Some(0), Some(0), Some(7), Some(0), None]);
     }
 
     #[test]
