@@ -268,13 +268,18 @@ pub struct PoolArgs {
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
     /// Where the runs are made [default: local, or the --executor-config file's `kind`]:
-    /// `local` on this machine, `slurm` as job arrays of a Slurm cluster (docs/cluster.md).
+    /// `local` on this machine, `slurm` as job arrays of a Slurm cluster, `ssh` on the hosts
+    /// of --hosts (docs/cluster.md).
     #[arg(long, value_enum)]
     pub executor: Option<ExecutorKind>,
     /// A TOML file with an `[executor]` section (kind, partition, time, mem, sbatch_args,
     /// jobs, runs_per_task, poll_seconds); the command line's flags win over it.
     #[arg(long, value_name = "FILE")]
     pub executor_config: Option<PathBuf>,
+    /// The hosts of --executor ssh: a hosts file's `[[host]]` names and launchers (the file of
+    /// `swarm run --hosts` serves), with an optional `jobs` and `swarm` path per host.
+    #[arg(long, value_name = "HOSTS.TOML")]
+    pub hosts: Option<PathBuf>,
     /// Slurm partition of the runs (`sbatch --partition`).
     #[arg(long, help_heading = "Slurm")]
     pub partition: Option<String>,
@@ -306,6 +311,9 @@ pub enum ExecutorKind {
     Local,
     /// One Slurm job array per batch of runs (`sbatch --array`), on a filesystem the nodes share.
     Slurm,
+    /// Child `swarm run`s on the hosts of --hosts, through their launchers (`ssh host`), --jobs
+    /// per host, on a filesystem the hosts share.
+    Ssh,
 }
 
 /// `swarm bench <what> [args]`: everything after `bench` goes to `swarm-bench` untouched,

@@ -156,6 +156,19 @@ impl Lab {
         ]
     }
 
+    /// Kills everything on host `i`, its holder too: the host is gone, and its launcher fails
+    /// from now on (`nsenter` finds no process to enter).
+    pub fn kill_host(&mut self, i: usize) {
+        for pid in self.processes(i) {
+            // SAFETY: kill has no memory effects.
+            unsafe {
+                libc::kill(pid, libc::SIGKILL);
+            }
+        }
+        let _ = self.holders[i].kill();
+        let _ = self.holders[i].wait();
+    }
+
     /// Pids of every process in host `i`'s network namespace but its holder.
     pub fn processes(&self, i: usize) -> Vec<i32> {
         let out = Command::new("ip")

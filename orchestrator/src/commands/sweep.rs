@@ -169,6 +169,7 @@ fn sweep_with(
         write_error: None,
         stopping: false,
         slurm: matches!(executor, Executor::Slurm(_)),
+        hosts_lost: Vec::new(),
     };
 
     // Runs an earlier (detached or stopped) invocation left to Slurm come first: they are not
@@ -194,7 +195,7 @@ fn sweep_with(
         ));
         let poll = match &executor {
             Executor::Slurm(s) => s.poll,
-            Executor::Local { .. } => std::time::Duration::from_secs(1),
+            Executor::Local { .. } | Executor::Ssh(_) => std::time::Duration::from_secs(1),
         };
         interrupted = slurm::wait(&submitted, poll, false, &interrupt, &mut |ev| {
             if let Event::Finished(i, o) = &ev
@@ -326,6 +327,8 @@ struct Fold<'a> {
     stopping: bool,
     /// The runs go to Slurm: Ctrl-C cancels them there.
     slurm: bool,
+    /// Hosts of the ssh executor lost on the way (their runs went to the others).
+    hosts_lost: Vec<String>,
 }
 
 impl Fold<'_> {
@@ -336,6 +339,10 @@ impl Fold<'_> {
     }
 
     fn interrupt(&mut self, ev: Event) {
+        if let Event::HostLost(line) = &ev {
+            self.pb.suspend(|| eprintln!("warning: {line}"));
+            self.hosts_lost.push(line.clone());
+        }
         if let Event::Interrupt(n) = ev {
             self.stopping = true;
             let slurm = self.slurm;
@@ -400,6 +407,13 @@ impl Fold<'_> {
 
     /// Exit 1 when a run failed or was stopped from outside, naming the first.
     fn result(&mut self, runs: usize, csv_path: &Path) -> SwarmResult<()> {
+        if !self.hosts_lost.is_empty() {
+            eprintln!(
+                "{} host(s) lost during the sweep; their runs were made on the others: {}",
+                self.hosts_lost.len(),
+                self.hosts_lost.join("; ")
+            );
+        }
         if let Some(e) = self.write_error.take() {
             return Err(SwarmError::Internal(e.context("writing the sweep")));
         }

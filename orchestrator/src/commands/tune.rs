@@ -215,6 +215,7 @@ pub fn tune(args: &TuneArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
         let mut stopped_from_outside = 0usize;
         let interrupted = !jobs.is_empty()
             && runner::run_all(&jobs, &pool, interrupt.clone(), |ev| match ev {
+                Event::HostLost(line) => pb.suspend(|| eprintln!("warning: {line}")),
                 Event::Interrupt(n) => {
                     stopping = true;
                     pb.suspend(|| {

@@ -1,5 +1,5 @@
-//! Where a sweep's or a tune's runs are made: on this machine ([`super::runner`]'s pool) or as
-//! Slurm job arrays ([`super::slurm`]). Resolved once from the command line and an optional
+//! Where a sweep's or a tune's runs are made: on this machine or on hosts reached by ssh
+//! ([`super::runner`]'s pool), or as Slurm job arrays ([`super::slurm`]). Resolved once from the command line and an optional
 //! `[executor]` file, the command line winning, so every later step sees one plain value.
 
 use std::path::Path;
@@ -9,6 +9,7 @@ use serde::Deserialize;
 
 use crate::cli::{ExecutorKind, PoolArgs};
 use crate::error::{SwarmError, SwarmResult};
+use crate::sweep::runner::PoolHost;
 
 /// Most local runs at once: each is a thread of the pool and a child process.
 pub const MAX_LOCAL_JOBS: u64 = 256;
@@ -26,6 +27,8 @@ pub enum Executor {
     },
     /// Job arrays on a Slurm cluster.
     Slurm(SlurmOptions),
+    /// Child `swarm run`s on the hosts of a hosts file, through their launchers.
+    Ssh(Vec<PoolHost>),
 }
 
 /// How runs are submitted to Slurm.
@@ -82,7 +85,27 @@ pub fn resolve(pool: &PoolArgs) -> SwarmResult<Executor> {
     };
     let kind = pool.executor.or(file.kind).unwrap_or(ExecutorKind::Local);
     let jobs = pool.jobs.or(file.jobs);
+    if pool.hosts.is_some() && kind != ExecutorKind::Ssh {
+        return Err(SwarmError::User(
+            "--hosts names the hosts of the ssh executor; add --executor ssh".into(),
+        ));
+    }
     match kind {
+        ExecutorKind::Ssh => {
+            let Some(path) = &pool.hosts else {
+                return Err(SwarmError::User(
+                    "--executor ssh needs --hosts <hosts.toml> (its [[host]] names and launchers)"
+                        .into(),
+                ));
+            };
+            let jobs = jobs.unwrap_or(1);
+            if jobs > MAX_LOCAL_JOBS {
+                return Err(SwarmError::User(format!(
+                    "--jobs {jobs}: at most {MAX_LOCAL_JOBS} runs at once per host"
+                )));
+            }
+            Ok(Executor::Ssh(read_hosts(path, jobs as usize)?))
+        }
         ExecutorKind::Local => {
             let slurm_flag = [
                 ("--partition", pool.partition.is_some()),
@@ -139,6 +162,98 @@ pub fn resolve(pool: &PoolArgs) -> SwarmResult<Executor> {
     }
 }
 
+/// A `[[host]]` of a hosts file as the ssh executor reads it: the keys of `swarm run --hosts`
+/// are accepted (the same file serves both), `jobs` and `swarm` are the executor's.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SweepHost {
+    name: String,
+    launcher: Vec<String>,
+    jobs: Option<u64>,
+    swarm: Option<std::path::PathBuf>,
+    #[allow(dead_code)]
+    robots: Option<toml::Value>,
+    #[allow(dead_code)]
+    connect: Option<String>,
+    #[allow(dead_code)]
+    program: Option<std::path::PathBuf>,
+    #[allow(dead_code)]
+    certs: Option<std::path::PathBuf>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SweepHosts {
+    #[allow(dead_code)]
+    world: Option<toml::Value>,
+    #[serde(default)]
+    host: Vec<SweepHost>,
+}
+
+/// The hosts of `--executor ssh`, `jobs` runs at once on each unless its `jobs` says otherwise.
+fn read_hosts(path: &Path, jobs: usize) -> SwarmResult<Vec<PoolHost>> {
+    let name = path.display();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SwarmError::User(format!("--hosts {name}: cannot read: {e}")))?;
+    let value: toml::Value = toml::from_str(&text).map_err(|e| {
+        SwarmError::User(format!(
+            "{name}: not valid TOML: {}",
+            e.message().replace('\n', " ")
+        ))
+    })?;
+    let file: SweepHosts = serde_path_to_error::deserialize(value).map_err(|e| {
+        SwarmError::User(format!(
+            "{name}: key `{}`: {}",
+            e.path(),
+            e.inner().to_string().replace('\n', " ")
+        ))
+    })?;
+    if file.host.is_empty() {
+        return Err(SwarmError::User(format!(
+            "{name}: no [[host]]; the ssh executor needs at least one"
+        )));
+    }
+    let mut hosts = Vec::new();
+    for (i, h) in file.host.into_iter().enumerate() {
+        let ok_name = !h.name.is_empty()
+            && h.name.len() <= 32
+            && h.name
+                .bytes()
+                .all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'-');
+        if !ok_name {
+            return Err(SwarmError::User(format!(
+                "{name}: key `host[{i}].name`: {:?} is not 1-32 of a-z 0-9 -",
+                h.name
+            )));
+        }
+        if hosts.iter().any(|p: &PoolHost| p.name == h.name) {
+            return Err(SwarmError::User(format!(
+                "{name}: key `host[{i}].name`: {:?} is given twice",
+                h.name
+            )));
+        }
+        if h.launcher.is_empty() || h.launcher[0].is_empty() {
+            return Err(SwarmError::User(format!(
+                "{name}: key `host[{i}].launcher`: expected a command, e.g. [\"ssh\", \"{}\"]",
+                h.name
+            )));
+        }
+        let slots = h.jobs.unwrap_or(jobs as u64);
+        if !(1..=MAX_LOCAL_JOBS).contains(&slots) {
+            return Err(SwarmError::User(format!(
+                "{name}: key `host[{i}].jobs`: {slots} is out of range; expected 1 to {MAX_LOCAL_JOBS}"
+            )));
+        }
+        hosts.push(PoolHost {
+            name: h.name,
+            launcher: h.launcher,
+            slots: slots as usize,
+            swarm: h.swarm,
+        });
+    }
+    Ok(hosts)
+}
+
 /// Reads and checks an `--executor-config` file; a typo names the file and the key.
 fn read_section(path: &Path) -> SwarmResult<ExecutorSection> {
     let name = path.display();
@@ -172,6 +287,15 @@ impl Executor {
     pub fn describe(&self, runs: usize) -> String {
         match self {
             Executor::Local { jobs } => format!("{} at a time", (*jobs).min(runs.max(1))),
+            Executor::Ssh(hosts) => format!(
+                "on {} hosts ({})",
+                hosts.len(),
+                hosts
+                    .iter()
+                    .map(|h| format!("{} x{}", h.name, h.slots))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
             Executor::Slurm(s) => {
                 let mut d = String::from("as a Slurm job array");
                 if s.runs_per_task > 1 {
@@ -233,6 +357,48 @@ mod tests {
             resolve(&pool(&["--executor-config", fs, "--executor", "local"])).unwrap(),
             Executor::Local { jobs: 4 }
         );
+    }
+
+    #[test]
+    fn hosts_files_of_swarm_run_serve_the_ssh_executor() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("hosts.toml");
+        std::fs::write(
+            &f,
+            "[world]\nlisten = \"quic/10.0.0.1:7447\"\n[[host]]\nname = \"a\"\nlauncher = [\"ssh\", \"a\"]\nrobots = 4\n[[host]]\nname = \"b\"\nlauncher = [\"ssh\", \"b\"]\njobs = 3\nswarm = \"/opt/swarm\"\n",
+        )
+        .unwrap();
+        let fs = f.to_str().unwrap();
+        let e = resolve(&pool(&["--executor", "ssh", "--hosts", fs, "--jobs", "2"])).unwrap();
+        let Executor::Ssh(h) = e else { panic!("{e:?}") };
+        assert_eq!(h.len(), 2);
+        assert_eq!((h[0].name.as_str(), h[0].slots), ("a", 2));
+        assert_eq!(h[0].launcher, ["ssh", "a"]);
+        assert_eq!((h[1].name.as_str(), h[1].slots), ("b", 3));
+        assert_eq!(h[1].swarm.as_deref(), Some(Path::new("/opt/swarm")));
+        let e = resolve(&pool(&["--executor", "ssh"]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("needs --hosts"), "{e}");
+        let e = resolve(&pool(&["--hosts", fs])).unwrap_err().to_string();
+        assert!(e.contains("add --executor ssh"), "{e}");
+        std::fs::write(&f, "[[host]]\nname = \"a\"\nlauncher = []\n").unwrap();
+        let e = resolve(&pool(&["--executor", "ssh", "--hosts", fs]))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("key `host[0].launcher`: expected a command"),
+            "{e}"
+        );
+        std::fs::write(
+            &f,
+            "[[host]]\nname = \"a\"\nlauncher = [\"ssh\"]\njbos = 2\n",
+        )
+        .unwrap();
+        let e = resolve(&pool(&["--executor", "ssh", "--hosts", fs]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("key `host[0].jbos`: unknown field"), "{e}");
     }
 
     #[test]

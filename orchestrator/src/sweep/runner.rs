@@ -13,9 +13,12 @@
 use std::collections::{BTreeMap, VecDeque};
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
+use std::process::Command;
 use std::process::{ExitStatus, Stdio};
+use std::sync::Condvar;
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, Sender};
 
@@ -60,6 +63,22 @@ pub enum Event {
     Interrupt(u32),
     /// Job `index` ended.
     Finished(usize, Outcome),
+    /// A host of the ssh executor was lost; its runs go to the other hosts. One line.
+    HostLost(String),
+}
+
+/// Where a pool's workers start their runs: this machine (no launcher) or a host reached
+/// through its launcher (`ssh host`, `ip netns exec ns`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoolHost {
+    /// Its name in messages.
+    pub name: String,
+    /// The command prefixed to `swarm run ...`; empty: this machine.
+    pub launcher: Vec<String>,
+    /// Runs at once on it.
+    pub slots: usize,
+    /// The `swarm` executable there [default: the one running here, at the same path].
+    pub swarm: Option<PathBuf>,
 }
 
 /// How to run the jobs.
@@ -77,11 +96,21 @@ pub struct PoolOptions {
 
 /// Shared between the workers and the Ctrl-C forwarder.
 struct Shared {
-    next: AtomicUsize,
+    /// Jobs not started yet (a lost host's job goes back to the front) and how many run.
+    queue: Mutex<Queue>,
+    /// Signalled when a job ends or is put back: idle workers look at the queue again.
+    changed: Condvar,
     stop: AtomicBool,
     /// Running children: pid -> whether Ctrl-C was forwarded to it. A pid leaves this map
     /// before it is reaped, so a signal can never reach a recycled pid.
     active: Mutex<BTreeMap<i32, bool>>,
+    /// Per host: lost (its workers take no more jobs).
+    lost: Vec<AtomicBool>,
+}
+
+struct Queue {
+    pending: VecDeque<usize>,
+    running: usize,
 }
 
 /// Runs `jobs` with the options' executor and hands every [`Event`] to `on_event` on the
@@ -93,40 +122,57 @@ pub fn run_all(
     on_event: impl FnMut(Event),
 ) -> bool {
     match &opts.executor {
-        Executor::Local { jobs: n } => run_local(jobs, opts, *n, interrupt, on_event),
+        Executor::Local { jobs: n } => {
+            let here = PoolHost {
+                name: "this machine".into(),
+                launcher: Vec::new(),
+                slots: *n,
+                swarm: None,
+            };
+            run_pool(jobs, opts, &[here], interrupt, on_event)
+        }
+        Executor::Ssh(hosts) => run_pool(jobs, opts, hosts, interrupt, on_event),
         Executor::Slurm(slurm) => super::slurm::run_all(jobs, opts, slurm, interrupt, on_event),
     }
 }
 
-/// The local pool: `workers` child `swarm run`s at a time.
-fn run_local(
+/// The pool: `slots` workers per host, each starting one child `swarm run` after the other.
+fn run_pool(
     jobs: &[Job],
     opts: &PoolOptions,
-    workers: usize,
+    hosts: &[PoolHost],
     interrupt: Receiver<()>,
     mut on_event: impl FnMut(Event),
 ) -> bool {
     let shared = Shared {
-        next: AtomicUsize::new(0),
+        queue: Mutex::new(Queue {
+            pending: (0..jobs.len()).collect(),
+            running: 0,
+        }),
+        changed: Condvar::new(),
         stop: AtomicBool::new(false),
         active: Mutex::new(BTreeMap::new()),
+        lost: hosts.iter().map(|_| AtomicBool::new(false)).collect(),
     };
-    let workers = workers.clamp(1, jobs.len().max(1));
     let (tx, rx) = crossbeam_channel::unbounded::<Option<Event>>();
     let (quit_tx, quit_rx) = crossbeam_channel::bounded::<()>(0);
+    let mut workers = 0;
     std::thread::scope(|s| {
         {
             let tx = tx.clone();
             let shared = &shared;
             s.spawn(move || forward_interrupts(&interrupt, &quit_rx, shared, &tx));
         }
-        for _ in 0..workers {
-            let tx = tx.clone();
-            let shared = &shared;
-            s.spawn(move || {
-                worker(jobs, opts, shared, &tx);
-                let _ = tx.send(None);
-            });
+        for h in 0..hosts.len() {
+            for _ in 0..hosts[h].slots.clamp(1, jobs.len().max(1)) {
+                workers += 1;
+                let tx = tx.clone();
+                let shared = &shared;
+                s.spawn(move || {
+                    worker(jobs, opts, hosts, h, shared, &tx);
+                    let _ = tx.send(None);
+                });
+            }
         }
         let mut left = workers;
         while left > 0 {
@@ -179,22 +225,135 @@ fn forward_interrupts(
     }
 }
 
-fn worker(jobs: &[Job], opts: &PoolOptions, shared: &Shared, tx: &Sender<Option<Event>>) {
-    while !shared.stop.load(Ordering::SeqCst) {
-        let i = shared.next.fetch_add(1, Ordering::SeqCst);
-        let Some(job) = jobs.get(i) else { return };
-        let outcome = run_one(job, opts, shared);
+/// Takes jobs for host `h` until none is left (or Ctrl-C, or the host is lost). An idle worker
+/// waits while jobs run elsewhere: a lost host's job may come back to the queue.
+fn worker(
+    jobs: &[Job],
+    opts: &PoolOptions,
+    hosts: &[PoolHost],
+    h: usize,
+    shared: &Shared,
+    tx: &Sender<Option<Event>>,
+) {
+    let host = &hosts[h];
+    loop {
+        let i = {
+            let mut q = shared.queue.lock().unwrap_or_else(|e| e.into_inner());
+            loop {
+                if shared.stop.load(Ordering::SeqCst) || shared.lost[h].load(Ordering::SeqCst) {
+                    return;
+                }
+                if let Some(i) = q.pending.pop_front() {
+                    q.running += 1;
+                    break i;
+                }
+                if q.running == 0 {
+                    return;
+                }
+                q = shared.changed.wait(q).unwrap_or_else(|e| e.into_inner());
+            }
+        };
+        let outcome = run_one(&jobs[i], opts, host, shared);
+        let outcome = match host_lost(host, &outcome) {
+            Some(why) => {
+                shared.lost[h].store(true, Ordering::SeqCst);
+                let others = (0..hosts.len()).any(|o| !shared.lost[o].load(Ordering::SeqCst));
+                let rel = jobs[i].dir.file_name().map_or_else(
+                    || jobs[i].dir.display().to_string(),
+                    |n| n.to_string_lossy().into_owned(),
+                );
+                if others {
+                    let mut q = shared.queue.lock().unwrap_or_else(|e| e.into_inner());
+                    q.pending.push_front(i);
+                    q.running -= 1;
+                    drop(q);
+                    shared.changed.notify_all();
+                    let _ = tx.send(Some(Event::HostLost(format!(
+                        "host {} lost ({why}); its run runs/{rel} goes to another host",
+                        host.name
+                    ))));
+                    return;
+                }
+                Outcome::Failed {
+                    metrics: None,
+                    reason: format!("host {} lost ({why}) and no host is left", host.name),
+                }
+            }
+            None => outcome,
+        };
+        {
+            let mut q = shared.queue.lock().unwrap_or_else(|e| e.into_inner());
+            q.running -= 1;
+        }
+        shared.changed.notify_all();
         if tx.send(Some(Event::Finished(i, outcome))).is_err() {
             return;
         }
     }
 }
 
+/// Whether a run that failed without writing its metrics failed because its host is gone:
+/// then `launcher true` fails too (ssh's own failure is exit 255). Only for remote hosts.
+fn host_lost(host: &PoolHost, outcome: &Outcome) -> Option<String> {
+    if host.launcher.is_empty() || !matches!(outcome, Outcome::Failed { metrics: None, .. }) {
+        return None;
+    }
+    let mut probe = Command::new(&host.launcher[0]);
+    probe
+        .args(&host.launcher[1..])
+        .arg("true")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
+    let mut child = match probe.spawn() {
+        Ok(c) => c,
+        Err(e) => return Some(format!("cannot run its launcher: {e}")),
+    };
+    let deadline = Instant::now() + PROBE_TIMEOUT;
+    loop {
+        match child.try_wait() {
+            Ok(Some(status)) if status.success() => return None,
+            Ok(Some(status)) => {
+                let mut err = String::new();
+                if let Some(mut e) = child.stderr.take() {
+                    let _ = std::io::Read::read_to_string(&mut e, &mut err);
+                }
+                let said = err
+                    .lines()
+                    .rev()
+                    .find(|l| !l.trim().is_empty())
+                    .unwrap_or("");
+                return Some(format!(
+                    "`{} true` {}: {}",
+                    host.launcher.join(" "),
+                    describe(status),
+                    said.trim()
+                ));
+            }
+            Ok(None) if Instant::now() < deadline => {
+                std::thread::sleep(Duration::from_millis(50));
+            }
+            _ => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Some(format!(
+                    "`{} true` did not answer in {} s",
+                    host.launcher.join(" "),
+                    PROBE_TIMEOUT.as_secs()
+                ));
+            }
+        }
+    }
+}
+
+/// How long a lost host's launcher may take to say so.
+const PROBE_TIMEOUT: Duration = Duration::from_secs(15);
+
 /// Prepares the run directory and runs `swarm run` in it. The child is spawned under the
 /// `active` lock after a last look at `stop`, so every child either sees a forwarded Ctrl-C
 /// or is never started. This thread waits for the child, so the child's parent-death signal
 /// (bound to the spawning thread) only fires if the sweep itself dies.
-fn run_one(job: &Job, opts: &PoolOptions, shared: &Shared) -> Outcome {
+fn run_one(job: &Job, opts: &PoolOptions, host: &PoolHost, shared: &Shared) -> Outcome {
     let mut child = {
         let mut active = shared.active.lock().unwrap_or_else(|e| e.into_inner());
         if shared.stop.load(Ordering::SeqCst) {
@@ -207,7 +366,15 @@ fn run_one(job: &Job, opts: &PoolOptions, shared: &Shared) -> Outcome {
                 reason: format!("cannot prepare {}: {e:#}", job.dir.display()),
             };
         }
-        let mut cmd = child_command(&opts.swarm);
+        let swarm = host.swarm.as_ref().unwrap_or(&opts.swarm);
+        let mut cmd = match host.launcher.split_first() {
+            None => child_command(swarm),
+            Some((launcher, args)) => {
+                let mut c = child_command(Path::new(launcher));
+                c.args(args).arg(swarm);
+                c
+            }
+        };
         // The directory holds the config the child runs from (and nothing of an earlier
         // attempt, see `prepare`), so the child needs --force; it still takes the
         // directory's lock and is refused if another run holds it.
@@ -230,7 +397,7 @@ fn run_one(job: &Job, opts: &PoolOptions, shared: &Shared) -> Outcome {
             Err(e) => {
                 return Outcome::Failed {
                     metrics: None,
-                    reason: format!("cannot start {}: {e}", opts.swarm.display()),
+                    reason: format!("cannot start {}: {e}", cmd.get_program().to_string_lossy()),
                 };
             }
         }
