@@ -257,8 +257,8 @@ pub struct TuneArgs {
 /// which overrides.
 #[derive(Args, Debug, Clone)]
 pub struct PoolArgs {
-    /// Runs at once [default: 1 on this machine (at most 256); with --executor slurm, as many
-    /// as the cluster gives (the array's `%N` limit)].
+    /// Runs at once [default: 1 on this machine (at most 256); per host with --executor ssh;
+    /// with --executor slurm, as many as the cluster gives (the array's `%N` limit)].
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
     pub jobs: Option<u64>,
     /// Run every scenario with the same cores in one process each, no IPC (identical results).
@@ -272,8 +272,8 @@ pub struct PoolArgs {
     /// of --hosts (docs/cluster.md).
     #[arg(long, value_enum)]
     pub executor: Option<ExecutorKind>,
-    /// A TOML file with an `[executor]` section (kind, partition, time, mem, sbatch_args,
-    /// jobs, runs_per_task, poll_seconds); the command line's flags win over it.
+    /// A TOML file with an `[executor]` section (kind, hosts, partition, time, mem,
+    /// sbatch_args, jobs, runs_per_task, poll_seconds); the command line's flags win over it.
     #[arg(long, value_name = "FILE")]
     pub executor_config: Option<PathBuf>,
     /// The hosts of --executor ssh: a hosts file's `[[host]]` names and launchers (the file of

@@ -56,6 +56,8 @@ pub struct SlurmOptions {
 #[serde(deny_unknown_fields)]
 struct ExecutorSection {
     kind: Option<ExecutorKind>,
+    /// The ssh executor's hosts file, relative to the executor file.
+    hosts: Option<std::path::PathBuf>,
     partition: Option<String>,
     time: Option<String>,
     mem: Option<String>,
@@ -79,20 +81,24 @@ const DEFAULT_POLL: f64 = 1.0;
 
 /// The executor the command line and its `--executor-config` file ask for.
 pub fn resolve(pool: &PoolArgs) -> SwarmResult<Executor> {
-    let file = match &pool.executor_config {
+    let mut file = match &pool.executor_config {
         Some(path) => read_section(path)?,
         None => ExecutorSection::default(),
     };
+    if let (Some(h), Some(cfg)) = (&mut file.hosts, &pool.executor_config) {
+        *h = cfg.parent().unwrap_or(Path::new(".")).join(&*h);
+    }
+    let hosts_file = pool.hosts.clone().or(file.hosts.take());
     let kind = pool.executor.or(file.kind).unwrap_or(ExecutorKind::Local);
     let jobs = pool.jobs.or(file.jobs);
-    if pool.hosts.is_some() && kind != ExecutorKind::Ssh {
+    if hosts_file.is_some() && kind != ExecutorKind::Ssh {
         return Err(SwarmError::User(
             "--hosts names the hosts of the ssh executor; add --executor ssh".into(),
         ));
     }
     match kind {
         ExecutorKind::Ssh => {
-            let Some(path) = &pool.hosts else {
+            let Some(path) = &hosts_file else {
                 return Err(SwarmError::User(
                     "--executor ssh needs --hosts <hosts.toml> (its [[host]] names and launchers)"
                         .into(),
@@ -376,6 +382,15 @@ mod tests {
         assert_eq!(h[0].launcher, ["ssh", "a"]);
         assert_eq!((h[1].name.as_str(), h[1].slots), ("b", 3));
         assert_eq!(h[1].swarm.as_deref(), Some(Path::new("/opt/swarm")));
+        // The same hosts from an executor file, found beside it.
+        let cluster = dir.path().join("cluster.toml");
+        std::fs::write(
+            &cluster,
+            "[executor]\nkind = \"ssh\"\nhosts = \"hosts.toml\"\njobs = 2\n",
+        )
+        .unwrap();
+        let from_file = resolve(&pool(&["--executor-config", cluster.to_str().unwrap()])).unwrap();
+        assert_eq!(from_file, Executor::Ssh(h.clone()));
         let e = resolve(&pool(&["--executor", "ssh"]))
             .unwrap_err()
             .to_string();
