@@ -192,4 +192,3 @@ fn runs_spread_over_three_hosts_and_a_killed_hosts_run_is_made_elsewhere() {
         assert!(base.is_empty() || base.ends_with(':'), "host {i}: {base}");
     }
 }
-
