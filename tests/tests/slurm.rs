@@ -374,3 +374,47 @@ fn no_sbatch_a_refused_submission_and_a_bad_executor_file_are_named() {
     );
     assert!(rows(&out).values().all(|row| row["failed"] == "true"));
 }
+
+#[test]
+fn a_task_killed_outright_is_a_failed_row_naming_how_it_ended() {
+    let (_guard, lab) = lab();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("sweep");
+    let args = [
+        "sweep",
+        "configs/goto_simple.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--set",
+        "scenario.stop_when_done=false",
+        "--set",
+        "scenario.ticks=100000",
+        "--vary",
+        "radio.loss=0",
+        "--executor",
+        "slurm",
+        "--detach",
+    ];
+    assert_ok(&swarm_on(&lab, &args));
+    let id = wait_running(&lab, &out, 0);
+    // SIGKILL to every process of the task, its shell too: nothing is left to write the run's
+    // exit code, as when a node dies.
+    let kill = lab
+        .command("scancel")
+        .args(["--signal=KILL", "--full"])
+        .arg(&id)
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let collected = swarm_on(&lab, &["sweep", "--collect", out.to_str().unwrap()]);
+    assert_eq!(collected.status.code(), Some(1), "{}", stderr(&collected));
+    let err = stderr(&collected);
+    assert!(
+        err.contains(&format!("failed: Slurm task {id} ended "))
+            && err.contains("before its run finished"),
+        "{err}"
+    );
+    assert!(!out.join("slurm/array-0/0.exit").exists());
+    assert_eq!(rows(&out)["0,1"]["failed"], "true");
+    assert_nothing_runs_in(&out);
+}

@@ -397,7 +397,11 @@ pub fn wait(
                 .as_ref()
                 .map(|s| s.get(&(array.job_id.clone(), task)).cloned());
             let outcome = if let Some(code) = exit_code(&array.dir, w.run) {
-                Some(finished(array, w.run, code, cancelled, state.flatten()))
+                let active = matches!(&state, Some(Some(s)) if ACTIVE.contains(&s.as_str()));
+                let (o, outside) = finished(array, w.run, code, cancelled, state.flatten());
+                // A stop from outside is named by the task's final state (CANCELLED,
+                // TIMEOUT), which the queue shows once the task has ended (not COMPLETING).
+                (!(outside && active)).then_some(o)
             } else {
                 match state {
                     // The queue could not be read: nothing is known.
@@ -428,22 +432,32 @@ pub fn wait(
     interrupts > 0
 }
 
-/// The outcome of run `i` of an array, which wrote its exit code.
-fn finished(array: &Array, i: usize, code: i32, cancelled: bool, state: Option<String>) -> Outcome {
+/// The outcome of run `i` of an array, which wrote its exit code, and whether something
+/// outside the sweep stopped it.
+fn finished(
+    array: &Array,
+    i: usize,
+    code: i32,
+    cancelled: bool,
+    state: Option<String>,
+) -> (Outcome, bool) {
     let task = i / array.per_task;
     let tail = log_tail(&array.dir, i);
     let status = Ok(ExitStatus::from_raw_code(code));
     match runner::classify(&array.runs[i], status, cancelled, &tail) {
         // Stopped, but not by this sweep: someone cancelled the task (`scancel`).
-        Outcome::Interrupted if !cancelled => Outcome::Failed {
-            metrics: None,
-            reason: format!(
-                "Slurm task {}_{task} was stopped from outside the sweep{}",
-                array.job_id,
-                state.map(|s| format!(" ({s})")).unwrap_or_default()
-            ),
-        },
-        o => o,
+        Outcome::Interrupted if !cancelled => (
+            Outcome::Failed {
+                metrics: None,
+                reason: format!(
+                    "Slurm task {}_{task} was stopped from outside the sweep{}",
+                    array.job_id,
+                    state.map(|s| format!(" ({s})")).unwrap_or_default()
+                ),
+            },
+            true,
+        ),
+        o => (o, false),
     }
 }
 
