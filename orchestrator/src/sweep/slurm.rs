@@ -444,19 +444,25 @@ fn finished(
     let task = i / array.per_task;
     let tail = log_tail(&array.dir, i);
     let status = Ok(ExitStatus::from_raw_code(code));
+    let stopped = |metrics, how: String| {
+        let reason = format!(
+            "Slurm task {}_{task} was stopped from outside the sweep{}{how}",
+            array.job_id,
+            state
+                .as_ref()
+                .map(|s| format!(" ({s})"))
+                .unwrap_or_default()
+        );
+        (Outcome::Failed { metrics, reason }, true)
+    };
     match runner::classify(&array.runs[i], status, cancelled, &tail) {
-        // Stopped, but not by this sweep: someone cancelled the task (`scancel`).
-        Outcome::Interrupted if !cancelled => (
-            Outcome::Failed {
-                metrics: None,
-                reason: format!(
-                    "Slurm task {}_{task} was stopped from outside the sweep{}",
-                    array.job_id,
-                    state.map(|s| format!(" ({s})")).unwrap_or_default()
-                ),
-            },
-            true,
-        ),
+        // Stopped in order, but not by this sweep: someone cancelled the task (`scancel`).
+        Outcome::Interrupted if !cancelled => stopped(None, String::new()),
+        // Killed by a signal (128 + n) the sweep did not send: Slurm's, on a cancel or a
+        // time limit (its SIGTERM reaches the run twice, from Slurm and from the task's shell).
+        Outcome::Failed { metrics, reason } if !cancelled && code >= 128 => {
+            stopped(metrics, format!(": {reason}"))
+        }
         o => (o, false),
     }
 }
