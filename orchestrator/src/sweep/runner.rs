@@ -18,7 +18,7 @@ use std::process::{ExitStatus, Stdio};
 use std::sync::Condvar;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use crossbeam_channel::{Receiver, Sender};
 
@@ -305,43 +305,43 @@ fn host_lost(host: &PoolHost, outcome: &Outcome) -> Option<String> {
         .stdin(Stdio::null())
         .stdout(Stdio::null())
         .stderr(Stdio::piped());
-    let mut child = match probe.spawn() {
+    let child = match probe.spawn() {
         Ok(c) => c,
         Err(e) => return Some(format!("cannot run its launcher: {e}")),
     };
-    let deadline = Instant::now() + PROBE_TIMEOUT;
-    loop {
-        match child.try_wait() {
-            Ok(Some(status)) if status.success() => return None,
-            Ok(Some(status)) => {
-                let mut err = String::new();
-                if let Some(mut e) = child.stderr.take() {
-                    let _ = std::io::Read::read_to_string(&mut e, &mut err);
-                }
-                let said = err
-                    .lines()
-                    .rev()
-                    .find(|l| !l.trim().is_empty())
-                    .unwrap_or("");
-                return Some(format!(
-                    "`{} true` {}: {}",
-                    host.launcher.join(" "),
-                    describe(status),
-                    said.trim()
-                ));
+    let pid = child.id() as i32;
+    // The probe is waited for on a thread so the worker blocks with a deadline, not a poll.
+    let (tx, rx) = crossbeam_channel::bounded(1);
+    std::thread::spawn(move || {
+        let _ = tx.send(child.wait_with_output());
+    });
+    match rx.recv_timeout(PROBE_TIMEOUT) {
+        Ok(Ok(out)) if out.status.success() => None,
+        Ok(Ok(out)) => {
+            let err = String::from_utf8_lossy(&out.stderr);
+            let said = err
+                .lines()
+                .rev()
+                .find(|l| !l.trim().is_empty())
+                .unwrap_or("");
+            Some(format!(
+                "`{} true` {}: {}",
+                host.launcher.join(" "),
+                describe(out.status),
+                said.trim()
+            ))
+        }
+        Ok(Err(e)) => Some(format!("its launcher could not be waited for: {e}")),
+        Err(_) => {
+            // SAFETY: kill has no memory effects; the probe is our child, reaped by its thread.
+            unsafe {
+                libc::kill(pid, libc::SIGKILL);
             }
-            Ok(None) if Instant::now() < deadline => {
-                std::thread::sleep(Duration::from_millis(50));
-            }
-            _ => {
-                let _ = child.kill();
-                let _ = child.wait();
-                return Some(format!(
-                    "`{} true` did not answer in {} s",
-                    host.launcher.join(" "),
-                    PROBE_TIMEOUT.as_secs()
-                ));
-            }
+            Some(format!(
+                "`{} true` did not answer in {} s",
+                host.launcher.join(" "),
+                PROBE_TIMEOUT.as_secs()
+            ))
         }
     }
 }
