@@ -4,6 +4,10 @@
 //! same processes; but the world publishes a prepared slice instead of computing one, and a
 //! robot answers `Command::act` at once instead of thinking. What the runtime costs beyond
 //! this is the world and robot cores and the shells' bookkeeping.
+//!
+//! The floor wakes its robots as the runtime did before the bell (issue 34): each floor robot
+//! sleeps in its own listener of the observation event, so a tick costs one notification
+//! (a datagram and a wake-up call) per robot. The runtime now rings the run's bell once.
 
 use std::time::{Duration, Instant};
 
@@ -18,7 +22,7 @@ use super::fanout::own_fds;
 use super::stats::{Summary, summarize};
 use super::transports::idle_wait;
 use super::{PEER_TIMEOUT, bench_node, iox};
-use super::{WorldPorts, robot_ports, world_ports};
+use super::{WorldPorts, listening_robot_ports, world_ports};
 
 /// The tick after which memory is read: every observation sample has been written once.
 pub const SAMPLE_TICK: u64 = proto_ipc::OBSERVATION_SAMPLES as u64 + 1;
@@ -56,13 +60,8 @@ pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
         notifier,
         commands,
         listener,
-    } = world_ports(
-        &s.observations,
-        &s.observations_event,
-        &s.commands,
-        &s.commands_event,
-        n,
-    )?;
+        ..
+    } = world_ports(&s, n)?;
     say(&ChildMsg::Ready { addr: None })?;
 
     let ready_at = Instant::now();
@@ -179,7 +178,10 @@ pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
 /// The floor robot child: hello, then answer every tick at once until shutdown.
 pub fn agent(run: &RunServices, id: u32) -> anyhow::Result<()> {
     let node = bench_node(run, &run.robot_node_name(id))?;
-    let ports = robot_ports(&node, run)?;
+    let ports = listening_robot_ports(&node, run)?;
+    let proto_ipc::TickWait::Listener(listener) = &ports.wait else {
+        bail!("the floor robot has no listener");
+    };
     iox(ports.hello(id), "hello")?;
     loop {
         while let Some(sample) = iox(ports.subscriber.receive(), "receive")? {
@@ -194,6 +196,6 @@ pub fn agent(run: &RunServices, id: u32) -> anyhow::Result<()> {
             drop(sample);
             iox(ports.send(Command::act(robot, header.tick)), "send")?;
         }
-        idle_wait(&ports.listener)?;
+        idle_wait(listener)?;
     }
 }

@@ -183,29 +183,28 @@ pub use proto_ipc::{RobotPorts, WorldPorts};
 
 /// [`WorldPorts::open`] with the benchmarks' error type.
 pub fn world_ports(
-    observations: &proto_ipc::ObservationService,
-    observations_event: &proto_ipc::EventService,
-    commands: &proto_ipc::CommandService,
-    commands_event: &proto_ipc::EventService,
+    services: &proto_ipc::WorldServices,
     slots: usize,
 ) -> anyhow::Result<WorldPorts> {
-    WorldPorts::open(
-        observations,
-        observations_event,
-        commands,
-        commands_event,
-        slots,
-        0,
-    )
-    .map_err(|e| anyhow::anyhow!("world ports: {e}"))
+    WorldPorts::open(services, slots, 0).map_err(|e| anyhow::anyhow!("world ports: {e}"))
 }
 
-/// [`RobotPorts::open`] with the benchmarks' error type.
+/// [`RobotPorts::open`] with the benchmarks' error type: the robot sleeps on the run's bell,
+/// as a runtime robot does.
 pub fn robot_ports(
     node: &iceoryx2::node::Node<Svc>,
     run: &swarmrt_protocol::services::RunServices,
 ) -> anyhow::Result<RobotPorts> {
     RobotPorts::open(node, run).map_err(|e| anyhow::anyhow!("robot ports: {e}"))
+}
+
+/// [`RobotPorts::open_listening`] with the benchmarks' error type: the robot sleeps in its own
+/// listener, one notification per robot per tick (the floor).
+pub fn listening_robot_ports(
+    node: &iceoryx2::node::Node<Svc>,
+    run: &swarmrt_protocol::services::RunServices,
+) -> anyhow::Result<RobotPorts> {
+    RobotPorts::open_listening(node, run).map_err(|e| anyhow::anyhow!("robot ports: {e}"))
 }
 
 /// CLOCK_MONOTONIC in nanoseconds: the same clock in every process of this machine, so

@@ -23,10 +23,10 @@ use swarmrt_ipc as proto_ipc;
 use swarmrt_protocol::services::RunServices;
 use swarmrt_protocol::{Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION};
 
+use super::RobotPorts;
 use super::child::{ChildMsg, LossMode, say};
 use super::transports::{idle_wait, wait_for};
 use super::{PEER_TIMEOUT, Svc, bench_node, iox, service_name, spin_for};
-use super::{RobotPorts, WorldPorts, world_ports};
 
 /// Side-event id: the subscriber has called `receive()` since the publisher appeared.
 const CONNECTED: usize = 1;
@@ -175,18 +175,26 @@ pub fn subscriber(run: &RunServices, mode: LossMode, work_us: u64) -> anyhow::Re
         LossMode::RuntimeFree | LossMode::RuntimeLockStep => {
             let s = proto_ipc::create_services(&node, run, 1, 0, 0)
                 .map_err(|e| anyhow::anyhow!("{e}"))?;
+            let listener = s
+                .observations_event
+                .listener_builder()
+                .create()
+                .map_err(|e| anyhow::anyhow!("robot listener: {e}"))?;
             let RobotPorts {
                 subscriber: sub,
-                listener,
                 publisher,
                 notifier,
+                wait,
             } = RobotPorts::on(
                 &s.observations,
-                &s.observations_event,
                 &s.commands,
                 &s.commands_event,
+                proto_ipc::TickWait::Listener(Box::new(listener)),
             )
             .map_err(|e| anyhow::anyhow!("robot ports: {e}"))?;
+            let proto_ipc::TickWait::Listener(listener) = wait else {
+                bail!("the loss subscriber has no listener");
+            };
             say(&ChildMsg::Ready { addr: None })?;
             'run: loop {
                 while let Some(sample) = iox(sub.receive(), "receive")? {
@@ -253,18 +261,18 @@ pub fn publisher(
         }
         LossMode::RuntimeFree | LossMode::RuntimeLockStep => {
             let s = proto_ipc::open_services(&node, run).map_err(|e| anyhow::anyhow!("{e}"))?;
-            let WorldPorts {
-                publisher,
-                notifier,
-                commands,
-                listener,
-            } = world_ports(
-                &s.observations,
-                &s.observations_event,
-                &s.commands,
-                &s.commands_event,
-                1,
+            // The world's ports as `WorldPorts::open` makes them, on services this side opened.
+            let publisher = iox(
+                s.observations
+                    .publisher_builder()
+                    .initial_max_slice_len(1)
+                    .override_sample_preallocation(|_| proto_ipc::OBSERVATION_SAMPLES)
+                    .create(),
+                "publisher",
             )?;
+            let notifier = iox(s.observations_event.notifier_builder().create(), "notifier")?;
+            let commands = iox(s.commands.subscriber_builder().create(), "subscriber")?;
+            let listener = iox(s.commands_event.listener_builder().create(), "listener")?;
             iox(notifier.notify(), "announce")?;
             await_side(&side, CONNECTED)?;
             start = Instant::now();

@@ -673,21 +673,16 @@ pub fn path_world(run: &RunServices, runtime: bool, secs: f64) -> anyhow::Result
     if runtime {
         let s =
             proto_ipc::create_services(&node, run, 1, 0, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let ports = world_ports(&s, 1)?;
         let WorldPorts {
             publisher,
-            notifier,
             commands: subscriber,
             listener,
-        } = world_ports(
-            &s.observations,
-            &s.observations_event,
-            &s.commands,
-            &s.commands_event,
-            1,
-        )?;
+            ..
+        } = &ports;
         say(&ChildMsg::Ready { addr: None })?;
         // Hello first, as in the runtime.
-        wait_for(&listener, || {
+        wait_for(listener, || {
             let mut got = false;
             while iox(subscriber.receive(), "receive")?.is_some() {
                 got = true;
@@ -707,8 +702,8 @@ pub fn path_world(run: &RunServices, runtime: bool, secs: f64) -> anyhow::Result
                 tick,
             };
             iox(sample.send(), "send")?;
-            iox(notifier.notify(), "notify")?;
-            wait_for(&listener, || {
+            iox(ports.wake_robots(), "wake")?;
+            wait_for(listener, || {
                 let mut got = false;
                 while let Some(c) = iox(subscriber.receive(), "receive")? {
                     got |= c.payload().tick == tick;
@@ -726,7 +721,7 @@ pub fn path_world(run: &RunServices, runtime: bool, secs: f64) -> anyhow::Result
             tick,
         };
         iox(sample.send(), "send")?;
-        iox(notifier.notify(), "notify")?;
+        iox(ports.wake_robots(), "wake")?;
     } else {
         let (publisher, subscriber, notifier, listener) = raw_path_ports(&node, run, true)?;
         say(&ChildMsg::Ready { addr: None })?;
@@ -787,6 +782,7 @@ pub fn path_robot(run: &RunServices, runtime: bool) -> anyhow::Result<()> {
         let ports = robot_ports(&node, run)?;
         iox(ports.hello(0), "send")?;
         loop {
+            let seen = ports.wait.seen();
             while let Some(sample) = iox(ports.subscriber.receive(), "receive")? {
                 let header = *sample.user_header();
                 if header.shutdown != 0 {
@@ -797,7 +793,7 @@ pub fn path_robot(run: &RunServices, runtime: bool) -> anyhow::Result<()> {
                 drop(sample);
                 iox(ports.send(Command::act(robot, header.tick)), "send")?;
             }
-            idle_wait(&ports.listener)?;
+            tick_wait(&ports.wait, seen)?;
         }
     } else {
         let (publisher, subscriber, notifier, listener) = raw_path_ports(&node, run, false)?;
@@ -888,6 +884,18 @@ pub fn wait_for(
             bail!("peer silent for {PEER_TIMEOUT:?}");
         }
         iox(listener.timed_wait(|_| {}, PEER_TIMEOUT - waited), "wait")?;
+    }
+}
+
+/// Sleeps on a robot's [`proto_ipc::TickWait`] (read `seen` before draining) until the world
+/// wakes it; an error when [`PEER_TIMEOUT`] passes with nothing.
+pub fn tick_wait(wait: &proto_ipc::TickWait, seen: u32) -> anyhow::Result<()> {
+    match wait.wait(seen, PEER_TIMEOUT) {
+        Ok(proto_ipc::bell::Woke::TimedOut) => {
+            bail!("nothing from the peer for {PEER_TIMEOUT:?}")
+        }
+        Ok(_) => Ok(()),
+        Err(e) => bail!("wait: {e}"),
     }
 }
 

@@ -20,6 +20,7 @@ use iceoryx2_bb_system_types::path::Path as IoxPath;
 use swarmrt_protocol::services::{EVENT_COMMAND, EVENT_CONTROL, RunServices};
 use swarmrt_protocol::{Command, Observation, ObservationHeader};
 
+pub mod bell;
 pub mod cleanup;
 pub mod lines;
 pub mod rounds;
@@ -198,6 +199,9 @@ pub struct WorldServices {
     pub commands: CommandService,
     /// Robots (and the world's control thread) -> world wake-up.
     pub commands_event: EventService,
+    /// World -> robots wake-up in one call ([`bell`]): robots of this build sleep on it; the
+    /// event above still wakes observers and robots in other languages that listen on it.
+    pub bell: std::sync::Arc<bell::Bell>,
 }
 
 /// Creates the run's services for `robots` robots. Extra ports leave room for the world's
@@ -250,11 +254,18 @@ pub fn create_services(
         .max_listeners(2 + o)
         .max_nodes(n + 2 + o)
         .create()?;
+    let bell = bell::Bell::create(run).map_err(|e| {
+        format!(
+            "cannot create the tick bell {}: {e}",
+            bell::path(run).display()
+        )
+    })?;
     Ok(WorldServices {
         observations,
         observations_event,
         commands,
         commands_event,
+        bell: std::sync::Arc::new(bell),
     })
 }
 
@@ -312,21 +323,28 @@ pub struct WorldPorts {
     pub commands: Subscriber<Svc, Command, ()>,
     /// Woken by the robots (and the world's control thread).
     pub listener: Listener<Svc>,
+    /// Wakes every robot of this build at once.
+    pub bell: std::sync::Arc<bell::Bell>,
 }
 
 impl WorldPorts {
-    /// Opens the world's ports on the four services (as created by [`create_services`], or
-    /// opened by a benchmark that plays the world), for `slots` robots and `observers`
-    /// read-only subscribers (each may hold two samples: one queued, one borrowed).
+    /// Opens the world's ports on the run's services (as created by [`create_services`]),
+    /// for `slots` robots and `observers` read-only subscribers (each may hold two samples:
+    /// one queued, one borrowed).
     pub fn open(
-        observations: &ObservationService,
-        observations_event: &EventService,
-        commands: &CommandService,
-        commands_event: &EventService,
+        services: &WorldServices,
         slots: usize,
         observers: usize,
     ) -> Result<WorldPorts, IpcError> {
+        let WorldServices {
+            observations,
+            observations_event,
+            commands,
+            commands_event,
+            bell,
+        } = services;
         Ok(WorldPorts {
+            bell: bell.clone(),
             publisher: observations
                 .publisher_builder()
                 .initial_max_slice_len(slots)
@@ -337,6 +355,48 @@ impl WorldPorts {
             listener: commands_event.listener_builder().create()?,
         })
     }
+
+    /// Wakes the robots after a sample was sent: every robot sleeping on the bell with one
+    /// call, and the listeners of the observation event (observers, robots in other
+    /// languages that listen), one notification each.
+    pub fn wake_robots(&self) -> Result<(), IpcError> {
+        self.bell.ring()?;
+        self.notifier.notify()?;
+        Ok(())
+    }
+}
+
+/// How a robot sleeps until the world publishes.
+pub enum TickWait {
+    /// On the run's bell: the world wakes all such robots with one call.
+    Bell(bell::Bell),
+    /// In a listener of the observation event: one notification per robot per tick (the
+    /// benchmarks' floor, and what robots in other languages may still do).
+    Listener(Box<Listener<Svc>>),
+}
+
+impl TickWait {
+    /// What to pass to [`TickWait::wait`]: read it before looking for samples.
+    pub fn seen(&self) -> u32 {
+        match self {
+            TickWait::Bell(b) => b.seen(),
+            TickWait::Listener(_) => 0,
+        }
+    }
+
+    /// Sleeps until the world wakes the robots after `seen`, for at most `timeout`.
+    pub fn wait(&self, seen: u32, timeout: std::time::Duration) -> Result<bell::Woke, IpcError> {
+        use iceoryx2::port::listener::ListenerWaitError;
+        match self {
+            TickWait::Bell(b) => Ok(b.wait(seen, timeout)?),
+            TickWait::Listener(l) => match l.timed_wait(|_| {}, timeout) {
+                Ok(0) => Ok(bell::Woke::TimedOut),
+                Ok(_) => Ok(bell::Woke::Rung),
+                Err(ListenerWaitError::InterruptSignal) => Ok(bell::Woke::Interrupted),
+                Err(e) => Err(e.into()),
+            },
+        }
+    }
 }
 
 /// A robot's four ports: observations in (and their wake-up), its commands out (and theirs).
@@ -344,7 +404,7 @@ pub struct RobotPorts {
     /// Every robot's observations; a robot reads its own slot.
     pub subscriber: Subscriber<Svc, [Observation], ObservationHeader>,
     /// Woken by the world after each publish.
-    pub listener: Listener<Svc>,
+    pub wait: TickWait,
     /// This robot's commands.
     pub publisher: Publisher<Svc, Command, ()>,
     /// Wakes the world after each command.
@@ -352,28 +412,48 @@ pub struct RobotPorts {
 }
 
 impl RobotPorts {
-    /// Opens the run's services from `node` and creates a robot's ports on them.
+    /// Opens the run's services from `node` and creates a robot's ports on them; the robot
+    /// sleeps on the run's bell.
     pub fn open(node: &Node<Svc>, run: &RunServices) -> Result<RobotPorts, IpcError> {
         let s = open_services(node, run)?;
+        let bell = bell::Bell::open(run).map_err(|e| {
+            format!(
+                "cannot open the tick bell {}: {e}",
+                bell::path(run).display()
+            )
+        })?;
         RobotPorts::on(
             &s.observations,
-            &s.observations_event,
             &s.commands,
             &s.commands_event,
+            TickWait::Bell(bell),
         )
     }
 
-    /// A robot's ports on the four services (opened, or created by a benchmark that plays
-    /// the robot).
+    /// As [`RobotPorts::open`], but the robot sleeps in its own listener of the observation
+    /// event: one notification per robot per tick, as before the bell (the benchmarks' floor).
+    pub fn open_listening(node: &Node<Svc>, run: &RunServices) -> Result<RobotPorts, IpcError> {
+        let s = open_services(node, run)?;
+        let listener = s.observations_event.listener_builder().create()?;
+        RobotPorts::on(
+            &s.observations,
+            &s.commands,
+            &s.commands_event,
+            TickWait::Listener(Box::new(listener)),
+        )
+    }
+
+    /// A robot's ports on the services (opened, or created by a benchmark that plays the
+    /// robot), sleeping as `wait` says.
     pub fn on(
         observations: &ObservationService,
-        observations_event: &EventService,
         commands: &CommandService,
         commands_event: &EventService,
+        wait: TickWait,
     ) -> Result<RobotPorts, IpcError> {
         Ok(RobotPorts {
             subscriber: observations.subscriber_builder().create()?,
-            listener: observations_event.listener_builder().create()?,
+            wait,
             publisher: commands.publisher_builder().create()?,
             notifier: commands_event
                 .notifier_builder()

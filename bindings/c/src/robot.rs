@@ -22,7 +22,6 @@ use std::ffi::OsString;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::Node;
 use swarmrt_ipc::{self as ipc, RobotPorts, Svc};
 use swarmrt_protocol::services::{RunServices, env, valid_run_id};
@@ -193,6 +192,8 @@ impl Robot {
         }
         let slot = (self.env.robot - self.env.slot_offset) as usize;
         loop {
+            // Read before draining: a tick published after this read rings past it.
+            let seen = self.ports.wait.seen();
             // Drain every sample that arrived; each is one tick to answer, in order.
             while let Some(sample) = self
                 .ports
@@ -224,13 +225,12 @@ impl Robot {
                 *out = *obs;
                 return Ok(Step::Observation);
             }
-            match self.ports.listener.timed_wait(|_| {}, IDLE_CHECK) {
-                Ok(_) => {}
-                // A signal interrupted the wait: SIGTERM/SIGINT (checked below) or the
-                // SIGCONT ending a freeze, after which Linux fails the wait with EINTR.
-                Err(ListenerWaitError::InterruptSignal) => {}
-                Err(e) => return Err(Error::Ipc(format!("wait: {e:?}"))),
-            }
+            // Sleeps on the run's bell; a signal ends the wait too: SIGTERM/SIGINT (checked
+            // below) or the SIGCONT ending a freeze.
+            self.ports
+                .wait
+                .wait(seen, IDLE_CHECK)
+                .map_err(|e| Error::Ipc(format!("wait: {e}")))?;
             if ipc::termination_requested(&self.node) {
                 self.ended = Some(Step::Terminated);
                 return Ok(Step::Terminated);

@@ -23,7 +23,10 @@ The rules it follows, and why:
   the world expects no answer), a DOWN robot still answers (the world ignores the command).
 * A sample with `shutdown != 0` ends the generator with `exit_code` 0; that, and only that,
   is what exit code 0 means to the orchestrator.
-* The wait is `timed_wait(500 ms)`: the timeout is a watchdog, not a poll. An interrupted
+* The robot sleeps on the run's tick bell (`_bell.py`, a futex word the world wakes all
+  robots with in one call), reading its count before draining so no tick is slept through;
+  with a world that has no bell it sleeps in a listener of the observation event instead.
+* The wait lasts at most 500 ms: the timeout is a watchdog, not a poll. An interrupted
   wait is a spurious wake (SIGCONT after a scheduled freeze fails the wait with EINTR); only
   SIGTERM/SIGINT ends the generator, with `exit_code` 143. They are noted by a handler of
   this module, not iceoryx2's: that one keeps only the last signal, and the orchestrator
@@ -41,6 +44,7 @@ from typing import Iterator, Optional
 
 import iceoryx2 as iox2
 
+from ._bell import Bell
 from ._messages import (
     EVENT_COMMAND,
     KIND_ACT,
@@ -114,6 +118,7 @@ class Robot:
         listener,
         publisher,
         notifier,
+        bell: Optional[Bell] = None,
     ) -> None:
         self.id = robot
         """This robot's id."""
@@ -133,6 +138,7 @@ class Robot:
         self._node = node
         self._subscriber = subscriber
         self._listener = listener
+        self._bell = bell
         self._publisher = publisher
         self._notifier = notifier
         self._idle = iox2.Duration.from_millis(IDLE_CHECK_MS)
@@ -168,6 +174,14 @@ class Robot:
         observations_event = node.service_builder(obs_name).event().open()
         commands = node.service_builder(cmd_name).publish_subscribe(Command).open()
         commands_event = node.service_builder(cmd_name).event().open()
+        # The bell, else (a world without one) a listener of the observation event: a
+        # listener costs the world one notification per tick, the bell nothing.
+        try:
+            bell: Optional[Bell] = Bell(_env("SWARMRT_IPC_ROOT"))
+            listener = None
+        except OSError:
+            bell = None
+            listener = observations_event.listener_builder().create()
         r = cls(
             robot=robot,
             incarnation=int(os.environ.get("SWARMRT_INCARNATION", "0")),
@@ -178,11 +192,12 @@ class Robot:
             storage=os.environ.get("SWARMRT_STORAGE", ""),
             node=node,
             subscriber=observations.subscriber_builder().create(),
-            listener=observations_event.listener_builder().create(),
+            listener=listener,
             publisher=commands.publisher_builder().create(),
             notifier=commands_event.notifier_builder()
             .default_event_id(iox2.EventId.new(EVENT_COMMAND))
             .create(),
+            bell=bell,
         )
         if hello:
             r.hello()
@@ -247,6 +262,8 @@ class Robot:
         next. Ends when the world shuts the run down (`exit_code` 0) or the process is asked
         to terminate (`exit_code` 143)."""
         while True:
+            # Read before draining: a tick published after this read rings past it.
+            seen = self._bell.seen() if self._bell is not None else 0
             while True:
                 sample = self._subscriber.receive()
                 if sample is None:
@@ -258,7 +275,10 @@ class Robot:
                 if obs.state in (STATE_ACTIVE, STATE_DOWN):
                     yield obs
             try:
-                self._listener.timed_wait(self._idle)
+                if self._bell is not None:
+                    self._bell.wait(seen, IDLE_CHECK_MS)
+                else:
+                    self._listener.timed_wait(self._idle)
             except iox2.ListenerWaitError as e:
                 # A signal interrupted the wait: SIGTERM/SIGINT (checked below) or the
                 # SIGCONT ending a scheduled freeze, after which Linux fails it with EINTR.

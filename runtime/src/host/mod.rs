@@ -184,14 +184,7 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
     let node = ipc::node(&run, &format!("swarmrt-{}-host", args.run_id))?;
     let observers = cfg.ipc.observers as usize;
     let services = ipc::create_services(&node, &run, count, cfg.faults.restart.len(), observers)?;
-    let ports = ipc::WorldPorts::open(
-        &services.observations,
-        &services.observations_event,
-        &services.commands,
-        &services.commands_event,
-        count,
-        observers,
-    )?;
+    let ports = ipc::WorldPorts::open(&services, count, observers)?;
     let (raw_tx, raw_rx) = crossbeam_channel::unbounded::<Msg>();
     let rx = ipc::wake_relay(&run, format!("swarmrt-{}-host-relay", args.run_id), raw_rx)?;
     spawn_stdin_reader(raw_tx.clone());
@@ -570,7 +563,7 @@ impl Relay<'_> {
             tick,
         };
         sample.send()?;
-        self.ports.notifier.notify()?;
+        self.ports.wake_robots()?;
         Ok(())
     }
 

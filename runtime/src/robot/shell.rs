@@ -1,5 +1,5 @@
-//! The robot process shell: opens the run's services, says hello, then sleeps in an
-//! iceoryx2 listener until the world publishes a tick, answers it, and sleeps again.
+//! The robot process shell: opens the run's services, says hello, then sleeps on the run's
+//! bell ([`swarmrt_ipc::bell`]) until the world publishes a tick, answers it, and sleeps again.
 
 use std::time::Duration;
 
@@ -85,6 +85,8 @@ pub fn run(
     tracing::debug!("hello sent");
 
     loop {
+        // Read before draining: a tick published after this read rings past it.
+        let seen = ports.wait.seen();
         // Drain every sample that arrived; each is one tick to answer, in order.
         while let Some(sample) = ports.subscriber.receive()? {
             let header = *sample.user_header();
@@ -148,16 +150,18 @@ pub fn run(
                 drop(sample);
                 ports.send(cmd)?;
             }
-            // The tick's broadcast wake-up is for observers; this robot's own listener woke it.
-            ports.listener.try_wait(|_| {})?;
         }
-        let listener = rounds.as_ref().map_or(&ports.listener, |r| &r.listener);
-        match listener.timed_wait(|_| {}, IDLE_CHECK) {
-            Ok(_) => {}
-            // A signal interrupted the wait: SIGTERM/SIGINT (checked below) or the SIGCONT
-            // ending a freeze, after which Linux fails the wait with EINTR.
-            Err(ListenerWaitError::InterruptSignal) => {}
-            Err(e) => return Err(e.into()),
+        // With rounds the world wakes this robot's own listener for every tick and round;
+        // otherwise the robot sleeps on the bell. Either wait also ends on a signal:
+        // SIGTERM/SIGINT (checked below) or the SIGCONT ending a freeze.
+        match &rounds {
+            Some(r) => match r.listener.timed_wait(|_| {}, IDLE_CHECK) {
+                Ok(_) | Err(ListenerWaitError::InterruptSignal) => {}
+                Err(e) => return Err(e.into()),
+            },
+            None => {
+                ports.wait.wait(seen, IDLE_CHECK)?;
+            }
         }
         if ipc::termination_requested(&node) {
             return Ok(Exit::Terminated);

@@ -406,14 +406,7 @@ pub fn run(
     let node = ipc::node(run, &run.world_node_name())?;
     let observers = cfg.ipc.observers as usize;
     let services = ipc::create_services(&node, run, n, cfg.faults.restart.len(), observers)?;
-    let ports = ipc::WorldPorts::open(
-        &services.observations,
-        &services.observations_event,
-        &services.commands,
-        &services.commands_event,
-        n,
-        observers,
-    )?;
+    let ports = ipc::WorldPorts::open(&services, n, observers)?;
     if cfg.radio.rounds > 0 && (hosts.is_some() || mode == Mode::Realtime) {
         return Err(
             "radio.rounds needs every robot on this host, in lock-step (no --hosts, no --realtime)"
@@ -736,7 +729,7 @@ impl Shell<'_> {
             tick,
         };
         sample.send()?;
-        self.ports.notifier.notify()?;
+        self.ports.wake_robots()?;
         if let Some(rounds) = &self.rounds {
             for &robot in &self.pending {
                 rounds.wake(robot)?;
@@ -853,7 +846,7 @@ impl Shell<'_> {
             tick,
         };
         sample.send()?;
-        self.ports.notifier.notify()?;
+        self.ports.wake_robots()?;
         if let Some(r) = self.remote.take() {
             r.finish(tick, &mut self.stats);
         }
