@@ -8,17 +8,23 @@
 //! sleeps only while the count is still that value, so a sample sent after the read is never
 //! slept through (the kernel compares the word and sleeps atomically).
 //!
+//! The way back uses the same file. Each robot of this build counts its answer on a second
+//! word and notifies the world's listener only when the count reaches the target the world
+//! set for the tick (the robots it waits for), so one notification wakes the world per tick
+//! instead of one per robot. A target of 0 (a host, real-time mode, rounds) means every
+//! robot notifies, as robots in other languages always do.
+//!
 //! Trust: the file lives in the run's private root (mode 0700, [`crate::cleanup::claim`]) and
-//! goes with it on cleanup. Robots map it read-only. A process of the same user that writes
-//! the word can only cause spurious or late wake-ups, which the world's deadline and the
-//! robots' watchdog wait already absorb.
+//! goes with it on cleanup. A process of the same user that writes the words can only cause
+//! spurious, early or late wake-ups, which the world's deadline and the robots' watchdog wait
+//! already absorb: the words say when to look, never what was sent.
 
 use std::io;
 use std::os::fd::AsRawFd;
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::PathBuf;
 use std::ptr::NonNull;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::time::Duration;
 
 use swarmrt_protocol::services::RunServices;
@@ -26,8 +32,13 @@ use swarmrt_protocol::services::RunServices;
 /// File name of the bell inside the run's iceoryx2 root.
 pub const BELL_FILE: &str = "tick.bell";
 
-/// Bytes mapped: one cache line, the word at offset 0.
-const BELL_LEN: usize = 64;
+/// Bytes mapped: three cache lines, so the robots' counting does not share a line with the
+/// word they sleep on. The tick count is at offset 0.
+const BELL_LEN: usize = 192;
+/// Offset of the answer count (u64), bumped by each counting robot after its command.
+const ANSWERS: usize = 64;
+/// Offset of the target (u64): the answer count at which a robot notifies the world.
+const TARGET: usize = 128;
 
 /// Why [`Bell::wait`] returned.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -84,8 +95,8 @@ impl Bell {
         Bell::map(&file, libc::PROT_READ | libc::PROT_WRITE)
     }
 
-    /// Opens run `run`'s bell read-only, as a robot does. Fails when the world has not created
-    /// it (for example a world of an older build).
+    /// Opens run `run`'s bell, as a robot does. Fails when the world has not created it (for
+    /// example a world of an older build).
     pub fn open(run: &RunServices) -> io::Result<Bell> {
         Bell::open_at(&path(run))
     }
@@ -93,6 +104,7 @@ impl Bell {
     fn open_at(at: &std::path::Path) -> io::Result<Bell> {
         let file = std::fs::OpenOptions::new()
             .read(true)
+            .write(true)
             .custom_flags(libc::O_NOFOLLOW | libc::O_CLOEXEC)
             .open(at)?;
         let meta = file.metadata()?;
@@ -105,7 +117,7 @@ impl Bell {
                 ),
             ));
         }
-        Bell::map(&file, libc::PROT_READ)
+        Bell::map(&file, libc::PROT_READ | libc::PROT_WRITE)
     }
 
     fn map(file: &std::fs::File, prot: libc::c_int) -> io::Result<Bell> {
@@ -131,6 +143,36 @@ impl Bell {
     fn word(&self) -> &AtomicU32 {
         // SAFETY: mapped, page-aligned and alive as long as self.
         unsafe { self.word.as_ref() }
+    }
+
+    fn counter(&self, offset: usize) -> &AtomicU64 {
+        // SAFETY: offset + 8 <= BELL_LEN, 8-aligned inside a page-aligned mapping that lives
+        // as long as self.
+        unsafe {
+            &*self
+                .word
+                .as_ptr()
+                .cast::<u8>()
+                .add(offset)
+                .cast::<AtomicU64>()
+        }
+    }
+
+    /// Robot side: counts one answer (call it after the command is sent). True when the
+    /// count reached the world's target, so the world is waiting for this answer: notify it.
+    pub fn answered(&self) -> bool {
+        let n = self.counter(ANSWERS).fetch_add(1, Ordering::SeqCst) + 1;
+        n >= self.counter(TARGET).load(Ordering::SeqCst)
+    }
+
+    /// World side: the answers counted so far.
+    pub fn answers(&self) -> u64 {
+        self.counter(ANSWERS).load(Ordering::SeqCst)
+    }
+
+    /// World side: robots notify once the count reaches `target` (0: every robot notifies).
+    pub fn expect(&self, target: u64) {
+        self.counter(TARGET).store(target, Ordering::SeqCst);
     }
 
     /// The bell's count now. Read it before looking for samples, then [`Bell::wait`] with it.
@@ -253,6 +295,33 @@ mod tests {
         // A second world process (a restarted host) takes the bell over without resetting it.
         let again = Bell::create_at(&at).unwrap();
         assert_eq!(again.seen(), now);
+    }
+
+    #[test]
+    fn only_the_answer_that_reaches_the_target_notifies() {
+        let dir = bell_dir();
+        let at = dir.path().join(BELL_FILE);
+        let world = Bell::create_at(&at).unwrap();
+        let robots: Vec<Bell> = (0..3).map(|_| Bell::open_at(&at).unwrap()).collect();
+        // No target: everyone notifies.
+        assert!(robots[0].answered());
+        let base = world.answers();
+        assert_eq!(base, 1);
+        world.expect(base + 3);
+        assert!(!robots[0].answered());
+        assert!(!robots[1].answered());
+        assert!(robots[2].answered(), "the third answer reaches the target");
+        assert_eq!(world.answers(), base + 3);
+        // A robot that answers twice only moves the notification earlier.
+        world.expect(world.answers() + 2);
+        assert!(!robots[0].answered());
+        assert!(robots[0].answered());
+        assert!(
+            robots[1].answered(),
+            "past the target every answer notifies"
+        );
+        world.expect(0);
+        assert!(robots[1].answered());
     }
 
     #[test]

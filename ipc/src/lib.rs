@@ -462,17 +462,28 @@ impl RobotPorts {
         })
     }
 
-    /// Sends `command` and wakes the world.
+    /// Sends `command` and wakes the world when it waits for this answer: on the bell, a
+    /// robot counts its answer and only the one that completes the tick notifies
+    /// ([`bell::Bell::answered`]); a listening robot always notifies.
     pub fn send(&self, command: Command) -> Result<(), IpcError> {
         self.publisher.send_copy(command)?;
-        self.notifier.notify()?;
+        let notify = match &self.wait {
+            TickWait::Bell(b) => b.answered(),
+            TickWait::Listener(_) => true,
+        };
+        if notify {
+            self.notifier.notify()?;
+        }
         Ok(())
     }
 
     /// Says robot `id` is ready (its ports exist): the world binds the robot to this
-    /// publisher from now on.
+    /// publisher from now on. Always wakes the world; not counted as an answer.
     pub fn hello(&self, id: u32) -> Result<(), IpcError> {
-        self.send(Command::hello(id, std::process::id()))
+        self.publisher
+            .send_copy(Command::hello(id, std::process::id()))?;
+        self.notifier.notify()?;
+        Ok(())
     }
 }
 

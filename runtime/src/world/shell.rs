@@ -446,6 +446,7 @@ pub fn run(
         stats: ShellStats::default(),
         interrupted: false,
         unresponsive: Duration::from_millis(cfg.scenario.unresponsive_ms),
+        counting: counting_robots(cfg, n, hosts.map(|(f, _)| f), mode),
     };
     // Phase 1: every robot says hello (or dies) before tick 0.
     let started = Instant::now();
@@ -456,6 +457,29 @@ pub fn run(
     // Phase 2: ticks, then the end.
     shell.run_ticks(cfg, mode, &mut recorder)?;
     shell.finish(recorder)
+}
+
+/// The robots that count their answers on the bell ([`ipc::bell::Bell::answered`]): this
+/// host's built-in robots, in lock-step without rounds. Robots in other languages notify
+/// every answer, so they are left out of the target; so is everyone in real time and with
+/// rounds, where the world takes answers as they come.
+fn counting_robots(
+    cfg: &Config,
+    n: usize,
+    hosts: Option<&HostsFile>,
+    mode: Mode,
+) -> Option<Vec<bool>> {
+    if mode == Mode::Realtime || cfg.radio.rounds > 0 {
+        return None;
+    }
+    Some(
+        (0..n as u32)
+            .map(|r| {
+                swarmrt_scenario::program::program_of(cfg, r).is_none()
+                    && !hosts.is_some_and(|f| f.host_of(r).is_some())
+            })
+            .collect(),
+    )
 }
 
 fn warn_on_fd_limit(n: usize) {
@@ -496,6 +520,8 @@ struct Shell<'a> {
     interrupted: bool,
     /// `scenario.unresponsive_ms`: a robot silent this long is given up.
     unresponsive: Duration,
+    /// Per robot, whether it counts its answers on the bell (None: nobody does).
+    counting: Option<Vec<bool>>,
 }
 
 impl Shell<'_> {
@@ -527,6 +553,29 @@ impl Shell<'_> {
             &mut self.pending,
         )?;
         Ok(())
+    }
+
+    /// Sets the bell's target for the pending robots that count their answers, given the
+    /// answer count `base` read before the last gather: the last of them notifies. True when
+    /// the count already reached it (an answer came in between): gather again, do not sleep.
+    fn expect_answers(&self, base: u64) -> bool {
+        let Some(counting) = &self.counting else {
+            return false;
+        };
+        let waiting = self
+            .pending
+            .iter()
+            .filter(|&&r| counting.get(r as usize).copied().unwrap_or(false))
+            .count() as u64;
+        let bell = &self.ports.bell;
+        if waiting == 0 {
+            // Only robots that notify every answer are left.
+            bell.expect(0);
+            return false;
+        }
+        let target = base + waiting;
+        bell.expect(target);
+        bell.answers() >= target
     }
 
     /// Sleeps until a robot, a host or the control thread wakes the world, or `timeout`.
@@ -721,6 +770,9 @@ impl Shell<'_> {
             .filter(|r| r.state.expects_command())
             .map(|r| r.id)
             .collect();
+        // Before the ring: the tick's last counting robot must see the new target.
+        let base = self.ports.bell.answers();
+        self.expect_answers(base);
         let sample = self.ports.publisher.loan_slice_uninit(obs.len())?;
         let mut sample = sample.write_from_slice(obs);
         *sample.user_header_mut() = ObservationHeader {
@@ -784,6 +836,7 @@ impl Shell<'_> {
         let sent_at = Instant::now();
         let mut late_logged = false;
         loop {
+            let base = self.ports.bell.answers();
             self.gather()?;
             if self.pending.is_empty() || self.interrupted {
                 return Ok(());
@@ -806,6 +859,9 @@ impl Shell<'_> {
                 }
                 self.unresponsive - waited
             };
+            if self.expect_answers(base) {
+                continue;
+            }
             self.sleep(timeout)?;
         }
     }
