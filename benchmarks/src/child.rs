@@ -199,6 +199,34 @@ pub enum ChildSpec {
         /// Its id.
         robot: u32,
     },
+    /// A peer floor's world (`swarm bench swarm --peers`): the floor's lock-step over
+    /// another transport; reports `ready` with its address.
+    PeerWorld {
+        /// Run id (names the socket's directory and the Zenoh keys).
+        run_id: String,
+        /// The transport (Unix sockets or Zenoh).
+        peer: crate::peers::Peer,
+        /// Robot processes to wait for.
+        robots: usize,
+        /// Lock-step ticks to run.
+        ticks: u64,
+    },
+    /// A peer floor's robot.
+    PeerAgent {
+        /// Run id.
+        run_id: String,
+        /// The transport.
+        peer: crate::peers::Peer,
+        /// Its id.
+        robot: u32,
+        /// Robots in the run (the world's start-up limit grows with it).
+        robots: usize,
+        /// The world's address (socket path or Zenoh endpoint).
+        addr: String,
+        /// Kill itself on receiving this tick (the watchdog's test).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        die_at: Option<u64>,
+    },
 }
 
 /// A line a child writes on stdout.
@@ -216,6 +244,11 @@ pub enum ChildMsg {
     Result {
         /// Role-specific JSON.
         value: serde_json::Value,
+    },
+    /// The measurement failed (the child exits with an error next).
+    Failed {
+        /// What went wrong.
+        error: String,
     },
 }
 
@@ -292,6 +325,26 @@ pub fn main(spec: &str) -> SwarmResult<()> {
             ticks,
         } => super::floor::world(&run_of(run_id)?, *robots, *ticks),
         ChildSpec::FloorAgent { run_id, robot } => super::floor::agent(&run_of(run_id)?, *robot),
+        ChildSpec::PeerWorld {
+            run_id,
+            peer,
+            robots,
+            ticks,
+        } => {
+            run_of(run_id)?;
+            crate::peers::world(run_id, *peer, *robots, *ticks)
+        }
+        ChildSpec::PeerAgent {
+            run_id,
+            peer,
+            robot,
+            robots,
+            addr,
+            die_at,
+        } => {
+            run_of(run_id)?;
+            crate::peers::agent(run_id, *peer, *robot, *robots, addr, *die_at)
+        }
     };
     r.map_err(SwarmError::Internal)
 }

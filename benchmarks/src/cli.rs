@@ -6,7 +6,16 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 use crate::ipc::IpcOptions;
+use crate::peers::{Fault, Peer, parse_peers};
 use crate::swarm::SwarmOptions;
+
+/// The value of `--peers`: the floors to run, in table order.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PeerList(pub Vec<Peer>);
+
+fn peer_list(s: &str) -> Result<PeerList, String> {
+    parse_peers(&[s.to_string()]).map(PeerList)
+}
 
 /// Measure the IPC and the lock-step swarm against their alternatives.
 #[derive(Parser, Debug)]
@@ -72,6 +81,14 @@ pub struct SwarmArgs {
     /// (the floor's tick varies by up to 2x between runs on a shared VM).
     #[arg(long, default_value_t = 1)]
     pub rounds: u32,
+    /// The floors each round runs after the runtime: the same lock-step with empty cores over
+    /// iceoryx2 (`iox2`, the runtime's services), Unix domain sockets (`uds`) and Zenoh peers
+    /// (`zenoh`); a comma-separated list, `all` or `none`.
+    #[arg(long, default_value = "all", value_parser = peer_list)]
+    pub peers: PeerList,
+    /// Test only: peer robot ROBOT kills itself at tick TICK (`ROBOT@TICK`).
+    #[arg(long, hide = true, value_parser = Fault::parse)]
+    pub peer_fault: Option<Fault>,
     /// The scenario the runtime runs (robots.count and the map are set per N).
     #[arg(long, default_value = "configs/goto_simple.toml")]
     pub config: PathBuf,
@@ -103,6 +120,8 @@ impl From<&SwarmArgs> for SwarmOptions {
             in_process_agents: a.in_process_agents.clone(),
             in_process_ticks: a.in_process_ticks,
             rounds: a.rounds,
+            peers: a.peers.0.clone(),
+            peer_fault: a.peer_fault,
             config: a.config.clone(),
             json: a.json,
             out: a.out.clone(),
@@ -153,7 +172,31 @@ mod tests {
         assert_eq!(o.in_process_agents, vec![100, 1000, 10000]);
         assert_eq!(o.in_process_ticks, 100);
         assert_eq!(o.rounds, 1);
+        assert_eq!(o.peers, Peer::ALL.to_vec());
+        assert_eq!(o.peer_fault, None);
         assert_eq!(o.config, PathBuf::from("configs/goto_simple.toml"));
         assert_eq!(o.out, Some(PathBuf::from("x")));
+
+        let cli = Cli::try_parse_from([
+            "swarm-bench",
+            "swarm",
+            "--peers",
+            "zenoh,uds",
+            "--peer-fault",
+            "1@5",
+        ])
+        .unwrap();
+        let BenchCmd::Swarm(args) = &cli.command else {
+            panic!("{cli:?}");
+        };
+        let o = SwarmOptions::from(args);
+        assert_eq!(o.peers, vec![Peer::Uds, Peer::Zenoh]);
+        assert_eq!(o.peer_fault, Some(Fault { robot: 1, tick: 5 }));
+        let cli = Cli::try_parse_from(["swarm-bench", "swarm", "--peers", "none"]).unwrap();
+        let BenchCmd::Swarm(args) = &cli.command else {
+            panic!("{cli:?}");
+        };
+        assert!(SwarmOptions::from(args).peers.is_empty());
+        assert!(Cli::try_parse_from(["swarm-bench", "swarm", "--peers", "tcp"]).is_err());
     }
 }

@@ -20,6 +20,7 @@ pub mod fanout;
 pub mod floor;
 pub mod ipc;
 pub mod loss;
+pub mod peers;
 pub mod procs;
 pub mod stats;
 pub mod swarm;

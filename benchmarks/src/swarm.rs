@@ -8,6 +8,11 @@
 //! and each of the 16 observation samples has been written once. The runtime's world keeps
 //! ticking while it is read (a few ticks pay for it); the floor's world waits between two
 //! ticks (outside its timing).
+//!
+//! With `--peers` each round also runs peer floors ([`peers`], issue 34): the floor's
+//! lock-step over Unix sockets and over Zenoh, after the iceoryx2 floor. Every row has the CPU
+//! of its processes ([`peers::Cpu`]): the reaped children's rusage over the whole run, and
+//! the part from the memory reading to the end (nearly only ticking).
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -20,7 +25,8 @@ use swarmrt_world::Stage;
 
 use super::child::{ChildMsg, ChildSpec};
 use super::floor::{FloorResult, SAMPLE_TICK};
-use super::procs::{Children, Memory, memory, my_children, open_fds};
+use super::peers::{self, Cpu, Fault, Peer, live_cpu_secs, reaped_children_cpu_secs};
+use super::procs::{Children, Memory, Messages, memory, my_children, open_fds};
 use super::stats::median;
 use super::{
     BenchRun, Interrupt, PEER_TIMEOUT, default_out, fmt_bytes, fmt_rate, machine, make_out_dir,
@@ -52,6 +58,11 @@ pub struct SwarmOptions {
     pub in_process_ticks: u64,
     /// Rounds of runtime and floor runs, alternated, in 1..=[`MAX_ROUNDS`] (`--rounds`).
     pub rounds: u32,
+    /// The floors each round runs after the runtime, in this order (`--peers`; default all:
+    /// iceoryx2, Unix sockets, Zenoh).
+    pub peers: Vec<Peer>,
+    /// A peer robot that kills itself at a tick (`--peer-fault`, hidden: the watchdog's test).
+    pub peer_fault: Option<Fault>,
     /// The scenario the runtime runs; robots.count and the map are set per N (`--config`).
     pub config: PathBuf,
     /// Print the results as JSON instead of tables (`--json`).
@@ -85,6 +96,9 @@ pub struct RuntimeRow {
     pub world_fds: Option<usize>,
     /// Wall seconds of the whole run (start-up, ticks, shutdown).
     pub wall_secs: f64,
+    /// CPU of the world and all robots.
+    #[serde(default)]
+    pub cpu: Option<Cpu>,
     /// The run directory.
     pub dir: String,
     /// Set when the run failed.
@@ -104,7 +118,62 @@ pub struct FloorRow {
     pub ticks_per_s: f64,
     /// Memory of the floor world and all floor robots.
     pub memory: Option<Memory>,
+    /// CPU of the floor world and all floor robots.
+    #[serde(default)]
+    pub cpu: Option<Cpu>,
     /// Set when the floor failed.
+    pub error: Option<String>,
+}
+
+/// A peer floor (Unix sockets, Zenoh) at one N: the floor's lock-step over that transport.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct PeerRow {
+    /// The transport.
+    pub peer: Peer,
+    /// Robot processes.
+    pub agents: u32,
+    /// Which round (from 1) of `--rounds`.
+    pub round: u32,
+    /// What its world measured (the iceoryx2 floor's fields).
+    pub result: Option<FloorResult>,
+    /// Ticks per second while ticking.
+    pub ticks_per_s: f64,
+    /// Memory of its world and all its robots.
+    pub memory: Option<Memory>,
+    /// CPU of its world and all its robots.
+    pub cpu: Option<Cpu>,
+    /// Wall seconds of the whole run (start-up, ticks, shutdown).
+    pub wall_secs: f64,
+    /// Set when it failed (or could not run at this N).
+    pub error: Option<String>,
+}
+
+/// One transport at one N, the median over its rounds that did not fail.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct TransportSummary {
+    /// Robot processes.
+    pub agents: u32,
+    /// "runtime", "iox2", "uds" or "zenoh".
+    pub transport: String,
+    /// Rounds that ran.
+    pub runs: usize,
+    /// Rounds that failed.
+    pub failed: usize,
+    /// Ticks per second.
+    pub ticks_per_s: f64,
+    /// Median tick, ms.
+    pub tick_ms_median: f64,
+    /// 99th percentile tick, ms.
+    pub tick_ms_p99: f64,
+    /// CPU of all processes per tick, start-up included, ms.
+    pub cpu_ms_per_tick: f64,
+    /// CPU of all processes per tick from the memory reading on, ms.
+    pub ticking_cpu_ms_per_tick: f64,
+    /// PSS of all processes, KiB.
+    pub pss_kib: f64,
+    /// Start-up until every robot said hello, ms.
+    pub startup_ms: f64,
+    /// The first failure, if any.
     pub error: Option<String>,
 }
 
@@ -172,6 +241,12 @@ pub struct SwarmReport {
     pub floor: Vec<FloorRow>,
     /// Runtime / floor, per N.
     pub comparison: Vec<Comparison>,
+    /// The peer floors (`--peers` uds, zenoh), per round and N.
+    #[serde(default)]
+    pub peers: Vec<PeerRow>,
+    /// Per N and transport (runtime and every floor), the median over rounds.
+    #[serde(default)]
+    pub transports: Vec<TransportSummary>,
     /// In-process, per N.
     pub in_process: Vec<InProcessRow>,
     /// Run ids used (their iceoryx2 roots and shared memory are gone afterwards).
@@ -269,7 +344,8 @@ pub fn run(args: &SwarmOptions, interrupt: &Interrupt) -> SwarmResult<()> {
         ..SwarmReport::default()
     };
     let rounds = args.rounds;
-    let pb = progress((scenarios.len() as u64 * 2) * rounds as u64 + in_proc.len() as u64);
+    let per_n = 1 + args.peers.len() as u64;
+    let pb = progress((scenarios.len() as u64 * per_n) * rounds as u64 + in_proc.len() as u64);
     for round in 1..=rounds {
         for (n, cfg) in &scenarios {
             let of = if rounds > 1 {
@@ -292,18 +368,38 @@ pub fn run(args: &SwarmOptions, interrupt: &Interrupt) -> SwarmResult<()> {
             }
             report.runtime.push(row);
             pb.inc(1);
-            pb.set_message(format!("floor, {n} robots{of}"));
-            let mut row = floor_run(*n, args.ticks, interrupt, &mut report.run_ids);
-            row.round = round;
-            interrupt.check()?;
-            if let Some(e) = &row.error {
-                tracing::warn!("floor with {n} robots failed: {e}");
+            for &peer in &args.peers {
+                pb.set_message(format!("{}, {n} robots{of}", peer.label()));
+                if peer == Peer::Iox2 {
+                    let mut row = floor_run(*n, args.ticks, interrupt, &mut report.run_ids);
+                    row.round = round;
+                    interrupt.check()?;
+                    if let Some(e) = &row.error {
+                        tracing::warn!("floor with {n} robots failed: {e}");
+                    }
+                    report.floor.push(row);
+                } else {
+                    let mut row = peer_run(
+                        peer,
+                        *n,
+                        args.ticks,
+                        args.peer_fault,
+                        interrupt,
+                        &mut report.run_ids,
+                    );
+                    row.round = round;
+                    interrupt.check()?;
+                    if let Some(e) = &row.error {
+                        tracing::warn!("{} with {n} robots failed: {e}", peer.label());
+                    }
+                    report.peers.push(row);
+                }
+                pb.inc(1);
             }
-            report.floor.push(row);
-            pb.inc(1);
         }
     }
     report.comparison = compare(&report.runtime, &report.floor);
+    report.transports = summarize_transports(&report);
     for (n, cfg) in &in_proc {
         pb.set_message(format!("in-process, {n} robots"));
         let row = in_process(cfg, interrupt).unwrap_or_else(|e| InProcessRow {
@@ -346,6 +442,12 @@ fn sample_children() -> (Memory, Option<usize>) {
     (memory(&pids), world)
 }
 
+/// CPU seconds of every child of this process so far, and how many there are.
+fn children_cpu() -> (f64, usize) {
+    let pids: Vec<u32> = my_children().iter().map(|(p, _)| *p).collect();
+    (live_cpu_secs(&pids), pids.len())
+}
+
 fn runtime_run(
     cfg: &Config,
     dir: &Path,
@@ -363,13 +465,25 @@ fn runtime_run(
         // Read at the world's report of tick SAMPLE_TICK (every observation sample has been
         // written once), in the supervisor's thread (it only delays reading the world's next
         // reports); the world goes on ticking meanwhile.
+        //
+        // The CPU of the live processes is read at the next report (with its tick), so the
+        // memory reading stays where it was and the CPU reading has a known tick.
         let mut sample: Option<(Memory, Option<usize>)> = None;
+        let mut cpu_read: Option<(u64, (f64, usize))> = None;
+        let cpu_before = reaped_children_cpu_secs();
         let outcome = processes::run(cfg, &config_path, dir, interrupt.receiver(), |tick| {
             if sample.is_none() && (tick >= SAMPLE_TICK || tick == cfg.scenario.ticks) {
                 sample = Some(sample_children());
+            } else if sample.is_some() && cpu_read.is_none() {
+                cpu_read = Some((tick, children_cpu()));
             }
         })?;
+        let cpu_after = reaped_children_cpu_secs();
         run_ids.push(outcome.run_id.clone());
+        // Every process was still there when the CPU was read.
+        let cpu_mid = cpu_read
+            .filter(|(_, (_, k))| *k == cfg.robots.count as usize + 1)
+            .map(|(tick, (secs, _))| (tick, secs));
         if let Some((mem, fds)) = sample {
             // A run shorter than the reading itself leaves fewer processes to read.
             if mem.processes == cfg.robots.count as usize + 1 {
@@ -395,6 +509,7 @@ fn runtime_run(
         let t = &metrics["shell"]["timing"];
         let num = |k: &str| t[k].as_f64().unwrap_or(f64::NAN);
         row.ticks = t["ticks"].as_u64().unwrap_or(0);
+        row.cpu = Some(Cpu::new(cpu_before, cpu_after, cpu_mid, row.ticks));
         row.ticks_per_s = row.ticks as f64 / num("seconds");
         row.tick_ms_median = num("tick_ms_median");
         row.tick_ms_p99 = num("tick_ms_p99");
@@ -429,6 +544,7 @@ fn floor_run(n: u32, ticks: u64, interrupt: &Interrupt, run_ids: &mut Vec<String
     let r = (|| -> anyhow::Result<()> {
         let run = BenchRun::claim()?;
         run_ids.push(run.id().to_string());
+        let cpu_before = reaped_children_cpu_secs();
         let mut kids = Children::new();
         let mut world = kids
             .spawn(
@@ -455,7 +571,9 @@ fn floor_run(n: u32, ticks: u64, interrupt: &Interrupt, run_ids: &mut Vec<String
         }
         let startup = PEER_TIMEOUT + Duration::from_millis(100) * n;
         let mut msg = world.next(startup, interrupt)?;
+        let mut cpu_mid = None;
         if msg == ChildMsg::Progress {
+            cpu_mid = Some((SAMPLE_TICK.min(ticks), live_cpu_secs(&kids.pids())));
             row.memory = Some(memory(&kids.pids()));
             world.go()?;
             msg = world.next(PEER_TIMEOUT + Duration::from_secs(ticks), interrupt)?;
@@ -465,10 +583,119 @@ fn floor_run(n: u32, ticks: u64, interrupt: &Interrupt, run_ids: &mut Vec<String
         };
         let res: FloorResult = serde_json::from_value(value)?;
         row.ticks_per_s = res.ticks as f64 / res.secs;
-        row.result = Some(res);
         kids.finish(PEER_TIMEOUT)?;
+        row.cpu = Some(Cpu::new(
+            cpu_before,
+            reaped_children_cpu_secs(),
+            cpu_mid,
+            res.ticks,
+        ));
+        row.result = Some(res);
         Ok(())
     })();
+    if let Err(e) = r {
+        row.error = Some(format!("{e:#}"));
+    }
+    row
+}
+
+/// The world's next message, a failure it reported turned into an error.
+fn next_of(world: &Messages, timeout: Duration, interrupt: &Interrupt) -> anyhow::Result<ChildMsg> {
+    match world.next(timeout, interrupt)? {
+        ChildMsg::Failed { error } => Err(anyhow::anyhow!("{error}")),
+        m => Ok(m),
+    }
+}
+
+/// One peer floor at `n` robots: its world, then the robots (each told the world's address),
+/// memory and CPU read between two ticks after [`SAMPLE_TICK`] as for the iceoryx2 floor.
+/// Anything that goes wrong (a robot that dies, a start-up that does not fit) is the row's
+/// error; every process is killed and reaped on the way out.
+fn peer_run(
+    peer: Peer,
+    n: u32,
+    ticks: u64,
+    fault: Option<Fault>,
+    interrupt: &Interrupt,
+    run_ids: &mut Vec<String>,
+) -> PeerRow {
+    let mut row = PeerRow {
+        peer,
+        agents: n,
+        round: 0,
+        result: None,
+        ticks_per_s: 0.0,
+        memory: None,
+        cpu: None,
+        wall_secs: 0.0,
+        error: None,
+    };
+    let started = Instant::now();
+    let r = (|| -> anyhow::Result<()> {
+        let run = BenchRun::claim()?;
+        run_ids.push(run.id().to_string());
+        let cpu_before = reaped_children_cpu_secs();
+        let mut kids = Children::new();
+        let mut world = kids
+            .spawn(
+                &format!("{} world", peer.label()),
+                &ChildSpec::PeerWorld {
+                    run_id: run.id().to_string(),
+                    peer,
+                    robots: n as usize,
+                    ticks,
+                },
+                true,
+            )?
+            .context("peer world messages")?;
+        let addr = match next_of(&world, Duration::from_secs(30), interrupt)? {
+            ChildMsg::Ready { addr: Some(a) } => a,
+            other => anyhow::bail!("{} world: expected ready, got {other:?}", peer.label()),
+        };
+        for id in 0..n {
+            interrupt.check()?;
+            kids.spawn(
+                &format!("{} robot {id}", peer.label()),
+                &ChildSpec::PeerAgent {
+                    run_id: run.id().to_string(),
+                    peer,
+                    robot: id,
+                    robots: n as usize,
+                    addr: addr.clone(),
+                    die_at: fault.filter(|f| f.robot == id).map(|f| f.tick),
+                },
+                false,
+            )?;
+        }
+        let startup = peers::startup_limit(n as usize) + PEER_TIMEOUT;
+        let mut msg = next_of(&world, startup, interrupt)?;
+        let mut cpu_mid = None;
+        if msg == ChildMsg::Progress {
+            cpu_mid = Some((SAMPLE_TICK.min(ticks), live_cpu_secs(&kids.pids())));
+            row.memory = Some(memory(&kids.pids()));
+            world.go()?;
+            msg = next_of(
+                &world,
+                PEER_TIMEOUT * 2 + Duration::from_secs(ticks),
+                interrupt,
+            )?;
+        }
+        let ChildMsg::Result { value } = msg else {
+            anyhow::bail!("{} world: expected a result, got {msg:?}", peer.label());
+        };
+        let res: FloorResult = serde_json::from_value(value)?;
+        row.ticks_per_s = res.ticks as f64 / res.secs;
+        kids.finish(PEER_TIMEOUT)?;
+        row.cpu = Some(Cpu::new(
+            cpu_before,
+            reaped_children_cpu_secs(),
+            cpu_mid,
+            res.ticks,
+        ));
+        row.result = Some(res);
+        Ok(())
+    })();
+    row.wall_secs = started.elapsed().as_secs_f64();
     if let Err(e) = r {
         row.error = Some(format!("{e:#}"));
     }
@@ -632,6 +859,9 @@ pub fn table(r: &SwarmReport) -> String {
             );
         }
     }
+    if !r.peers.is_empty() || !r.floor.is_empty() {
+        transport_tables(&mut s, r);
+    }
     let _ = writeln!(s, "\nwhere a runtime tick goes (mean ms per tick)");
     let _ = writeln!(
         s,
@@ -699,6 +929,103 @@ pub fn table(r: &SwarmReport) -> String {
     s
 }
 
+/// The runtime and every floor side by side: each run, then the medians over rounds.
+fn transport_tables(s: &mut String, r: &SwarmReport) {
+    use std::fmt::Write as _;
+    let _ = writeln!(
+        s,
+        "\nthe same lock-step over each transport (CPU/tick: user+sys of all the run's processes \
+         over its ticks, start-up included; tick CPU: from about tick {SAMPLE_TICK} to the end)"
+    );
+    let head = format!(
+        "{:>5} {:>5} {:<12} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "N",
+        "round",
+        "transport",
+        "ticks/s",
+        "median",
+        "p99",
+        "startup",
+        "CPU/tick",
+        "tick CPU",
+        "PSS"
+    );
+    let _ = writeln!(s, "{head}");
+    let cpu = |v: Option<f64>| v.map(ms).unwrap_or_else(|| "-".into());
+    for l in lines(r) {
+        if let Some(e) = &l.error {
+            let _ = writeln!(
+                s,
+                "{:>5} {:>5} {:<12} failed: {e}",
+                l.agents, l.round, l.label
+            );
+            continue;
+        }
+        let _ = writeln!(
+            s,
+            "{:>5} {:>5} {:<12} {:>8.1} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            l.agents,
+            l.round,
+            l.label,
+            l.ticks_per_s,
+            ms(l.median_ms),
+            ms(l.p99_ms),
+            cpu(l.startup_ms),
+            cpu(l.cpu.map(|c| c.ms_per_tick)),
+            cpu(l.cpu.and_then(|c| c.ticking_ms_per_tick)),
+            l.memory
+                .map(|m| fmt_bytes(m.pss_kib as f64 * 1024.0))
+                .unwrap_or_else(|| "-".into())
+        );
+    }
+    if r.runtime.iter().all(|x| x.round <= 1) {
+        return;
+    }
+    let _ = writeln!(s, "\nper N and transport, median over rounds");
+    let _ = writeln!(
+        s,
+        "{:>5} {:>5} {:<12} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "N",
+        "ok",
+        "transport",
+        "ticks/s",
+        "median",
+        "p99",
+        "startup",
+        "CPU/tick",
+        "tick CPU",
+        "PSS"
+    );
+    for t in &r.transports {
+        let label = TRANSPORTS
+            .iter()
+            .find(|(n, _)| *n == t.transport)
+            .map_or(t.transport.as_str(), |(_, l)| l);
+        let ok = format!("{}/{}", t.runs - t.failed, t.runs);
+        if t.runs == t.failed {
+            let _ = writeln!(
+                s,
+                "{:>5} {ok:>5} {label:<12} failed: {}",
+                t.agents,
+                t.error.as_deref().unwrap_or("")
+            );
+            continue;
+        }
+        let _ = writeln!(
+            s,
+            "{:>5} {ok:>5} {label:<12} {:>8.1} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            t.agents,
+            t.ticks_per_s,
+            ms(t.tick_ms_median),
+            ms(t.tick_ms_p99),
+            ms(t.startup_ms),
+            ms(t.cpu_ms_per_tick),
+            ms(t.ticking_cpu_ms_per_tick),
+            fmt_bytes(t.pss_kib * 1024.0)
+        );
+    }
+}
+
 fn ms(v: f64) -> String {
     if !v.is_finite() {
         "-".into()
@@ -747,6 +1074,165 @@ fn compare(runtime: &[RuntimeRow], floor: &[FloorRow]) -> Vec<Comparison> {
         .collect()
 }
 
+/// One run of one transport, whatever its kind of row: what the transport tables and plots
+/// show.
+#[derive(Debug, Clone)]
+struct Line {
+    agents: u32,
+    round: u32,
+    /// "runtime", "iox2", "uds", "zenoh".
+    transport: &'static str,
+    label: &'static str,
+    ticks_per_s: f64,
+    median_ms: f64,
+    p99_ms: f64,
+    startup_ms: Option<f64>,
+    cpu: Option<Cpu>,
+    memory: Option<Memory>,
+    error: Option<String>,
+}
+
+/// The transports in table (and colour) order.
+const TRANSPORTS: [(&str, &str); 4] = [
+    ("runtime", "runtime"),
+    ("iox2", "iox2 floor"),
+    ("uds", "UDS floor"),
+    ("zenoh", "Zenoh floor"),
+];
+
+/// What a floor row and a peer row have in common.
+struct FloorView<'a> {
+    agents: u32,
+    round: u32,
+    result: Option<&'a FloorResult>,
+    ticks_per_s: f64,
+    cpu: Option<Cpu>,
+    memory: Option<Memory>,
+    error: Option<&'a String>,
+}
+
+fn floor_line(f: FloorView<'_>, (transport, label): (&'static str, &'static str)) -> Line {
+    Line {
+        agents: f.agents,
+        round: f.round,
+        transport,
+        label,
+        ticks_per_s: f.ticks_per_s,
+        median_ms: f.result.map_or(f64::NAN, |x| x.tick_ns.median / 1e6),
+        p99_ms: f.result.map_or(f64::NAN, |x| x.tick_ns.p99 / 1e6),
+        startup_ms: f.result.map(|x| x.startup_ms),
+        cpu: f.cpu,
+        memory: f.memory,
+        error: f
+            .error
+            .cloned()
+            .or_else(|| f.result.is_none().then(|| "no result".to_string())),
+    }
+}
+
+/// Every run of every transport, in the order they ran (per round, per N: the runtime, then
+/// the floors).
+fn lines(r: &SwarmReport) -> Vec<Line> {
+    let mut out = Vec::new();
+    for rt in &r.runtime {
+        out.push(Line {
+            agents: rt.agents,
+            round: rt.round,
+            transport: TRANSPORTS[0].0,
+            label: TRANSPORTS[0].1,
+            ticks_per_s: rt.ticks_per_s,
+            median_ms: rt.tick_ms_median,
+            p99_ms: rt.tick_ms_p99,
+            startup_ms: rt.startup_ms,
+            cpu: rt.cpu,
+            memory: rt.memory,
+            error: rt.error.clone(),
+        });
+        for f in r
+            .floor
+            .iter()
+            .filter(|f| f.round == rt.round && f.agents == rt.agents)
+        {
+            out.push(floor_line(
+                FloorView {
+                    agents: f.agents,
+                    round: f.round,
+                    result: f.result.as_ref(),
+                    ticks_per_s: f.ticks_per_s,
+                    cpu: f.cpu,
+                    memory: f.memory,
+                    error: f.error.as_ref(),
+                },
+                TRANSPORTS[1],
+            ));
+        }
+        for &(name, label) in &TRANSPORTS[2..] {
+            for p in r
+                .peers
+                .iter()
+                .filter(|p| p.round == rt.round && p.agents == rt.agents && p.peer.name() == name)
+            {
+                out.push(floor_line(
+                    FloorView {
+                        agents: p.agents,
+                        round: p.round,
+                        result: p.result.as_ref(),
+                        ticks_per_s: p.ticks_per_s,
+                        cpu: p.cpu,
+                        memory: p.memory,
+                        error: p.error.as_ref(),
+                    },
+                    (name, label),
+                ));
+            }
+        }
+    }
+    out
+}
+
+/// Per N (in the order given) and transport (in table order), the median over the rounds
+/// that did not fail.
+fn summarize_transports(r: &SwarmReport) -> Vec<TransportSummary> {
+    let all = lines(r);
+    let mut ns: Vec<u32> = Vec::new();
+    for l in &all {
+        if !ns.contains(&l.agents) {
+            ns.push(l.agents);
+        }
+    }
+    let mut out = Vec::new();
+    for n in ns {
+        for (name, _) in TRANSPORTS {
+            let of: Vec<&Line> = all
+                .iter()
+                .filter(|l| l.agents == n && l.transport == name)
+                .collect();
+            if of.is_empty() {
+                continue;
+            }
+            let ok: Vec<&&Line> = of.iter().filter(|l| l.error.is_none()).collect();
+            let med = |f: &dyn Fn(&Line) -> Option<f64>| -> f64 {
+                median(&ok.iter().filter_map(|l| f(l)).collect::<Vec<f64>>())
+            };
+            out.push(TransportSummary {
+                agents: n,
+                transport: name.to_string(),
+                runs: of.len(),
+                failed: of.len() - ok.len(),
+                ticks_per_s: med(&|l| Some(l.ticks_per_s)),
+                tick_ms_median: med(&|l| Some(l.median_ms)),
+                tick_ms_p99: med(&|l| Some(l.p99_ms)),
+                cpu_ms_per_tick: med(&|l| l.cpu.map(|c| c.ms_per_tick)),
+                ticking_cpu_ms_per_tick: med(&|l| l.cpu.and_then(|c| c.ticking_ms_per_tick)),
+                pss_kib: med(&|l| l.memory.map(|m| m.pss_kib as f64)),
+                startup_ms: med(&|l| l.startup_ms),
+                error: of.iter().find_map(|l| l.error.clone()),
+            });
+        }
+    }
+    out
+}
+
 /// One point per N, the median of its rounds' values, in the order the counts first come.
 fn per_n_median(points: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
     let mut by_n: Vec<(f64, Vec<f64>)> = Vec::new();
@@ -760,158 +1246,93 @@ fn per_n_median(points: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
 }
 
 fn plots(r: &SwarmReport, dir: &Path) -> anyhow::Result<()> {
-    let ok_rt: Vec<&RuntimeRow> = r.runtime.iter().filter(|x| x.error.is_none()).collect();
-    let ok_fl: Vec<(&FloorRow, &FloorResult)> = r
-        .floor
-        .iter()
-        .filter_map(|f| f.result.as_ref().map(|x| (f, x)))
-        .collect();
-    // With several rounds each N has several rows: the plots show their median.
-    let series = |name: &str, colour, dashed, points: Vec<(f64, f64)>| Series {
-        name: name.into(),
-        points: per_n_median(points),
-        colour,
-        dashed,
+    // One line per transport (the same colour in every panel), each point the median of the
+    // rounds of its N that did not fail.
+    let of = |name: &str| -> Vec<&TransportSummary> {
+        r.transports
+            .iter()
+            .filter(|t| t.transport == name && t.runs > t.failed)
+            .collect()
     };
+    let line = |name: &str, what: &str, dashed: bool, y: &dyn Fn(&TransportSummary) -> f64| {
+        let colour = TRANSPORTS.iter().position(|(n, _)| *n == name).unwrap_or(0);
+        let label = TRANSPORTS[colour].1;
+        Series {
+            name: if what.is_empty() {
+                label.to_string()
+            } else {
+                format!("{label} {what}")
+            },
+            points: of(name)
+                .into_iter()
+                .map(|t| (t.agents as f64, y(t)))
+                .collect(),
+            colour,
+            dashed,
+        }
+    };
+    let present: Vec<&str> = TRANSPORTS
+        .iter()
+        .map(|(n, _)| *n)
+        .filter(|n| !of(n).is_empty())
+        .collect();
+    let each = |what: &str, dashed: bool, y: &dyn Fn(&TransportSummary) -> f64| -> Vec<Series> {
+        present.iter().map(|n| line(n, what, dashed, y)).collect()
+    };
+    let mut latency = each("median", false, &|t| t.tick_ms_median);
+    latency.extend(each("p99", true, &|t| t.tick_ms_p99));
+    let mut memory = vec![Series {
+        name: "runtime RSS".into(),
+        points: per_n_median(
+            r.runtime
+                .iter()
+                .filter(|x| x.error.is_none())
+                .filter_map(|x| {
+                    x.memory
+                        .map(|m| (x.agents as f64, m.rss_kib as f64 / 1024.0))
+                })
+                .collect(),
+        ),
+        colour: 0,
+        dashed: true,
+    }];
+    memory.extend(each("PSS", false, &|t| t.pss_kib / 1024.0));
+    let mut cpu = each("", false, &|t| t.cpu_ms_per_tick);
+    cpu.extend(each("ticking", true, &|t| t.ticking_cpu_ms_per_tick));
     let panels = vec![
         Panel {
             title: "lock-step ticks per second".into(),
             x_desc: "robot processes N".into(),
             y_desc: "ticks/s".into(),
-            series: vec![
-                series(
-                    "runtime",
-                    0,
-                    false,
-                    ok_rt
-                        .iter()
-                        .map(|x| (x.agents as f64, x.ticks_per_s))
-                        .collect(),
-                ),
-                series(
-                    "floor",
-                    1,
-                    false,
-                    ok_fl
-                        .iter()
-                        .map(|(f, _)| (f.agents as f64, f.ticks_per_s))
-                        .collect(),
-                ),
-            ],
+            series: each("", false, &|t| t.ticks_per_s),
             legend: Legend::UpperRight,
         },
         Panel {
             title: "tick latency".into(),
             x_desc: "robot processes N".into(),
             y_desc: "ms".into(),
-            series: vec![
-                series(
-                    "runtime median",
-                    0,
-                    false,
-                    ok_rt
-                        .iter()
-                        .map(|x| (x.agents as f64, x.tick_ms_median))
-                        .collect(),
-                ),
-                series(
-                    "runtime p99",
-                    0,
-                    true,
-                    ok_rt
-                        .iter()
-                        .map(|x| (x.agents as f64, x.tick_ms_p99))
-                        .collect(),
-                ),
-                series(
-                    "floor median",
-                    1,
-                    false,
-                    ok_fl
-                        .iter()
-                        .map(|(f, x)| (f.agents as f64, x.tick_ns.median / 1e6))
-                        .collect(),
-                ),
-                series(
-                    "floor p99",
-                    1,
-                    true,
-                    ok_fl
-                        .iter()
-                        .map(|(f, x)| (f.agents as f64, x.tick_ns.p99 / 1e6))
-                        .collect(),
-                ),
-            ],
+            series: latency,
+            legend: Legend::UpperLeft,
+        },
+        Panel {
+            title: "CPU of all processes per tick (dashed: from tick 17 on)".into(),
+            x_desc: "robot processes N".into(),
+            y_desc: "CPU ms per tick".into(),
+            series: cpu,
+            legend: Legend::UpperLeft,
+        },
+        Panel {
+            title: "memory of all processes (PSS)".into(),
+            x_desc: "robot processes N".into(),
+            y_desc: "MiB".into(),
+            series: memory,
             legend: Legend::UpperLeft,
         },
         Panel {
             title: "start-up until every robot is ready".into(),
             x_desc: "robot processes N".into(),
             y_desc: "ms".into(),
-            series: vec![
-                series(
-                    "runtime",
-                    0,
-                    false,
-                    ok_rt
-                        .iter()
-                        .filter_map(|x| x.startup_ms.map(|s| (x.agents as f64, s)))
-                        .collect(),
-                ),
-                series(
-                    "floor",
-                    1,
-                    false,
-                    ok_fl
-                        .iter()
-                        .map(|(f, x)| (f.agents as f64, x.startup_ms))
-                        .collect(),
-                ),
-            ],
-            legend: Legend::UpperLeft,
-        },
-        Panel {
-            title: "memory of all processes".into(),
-            x_desc: "robot processes N".into(),
-            y_desc: "MiB".into(),
-            series: vec![
-                series(
-                    "runtime RSS",
-                    0,
-                    true,
-                    ok_rt
-                        .iter()
-                        .filter_map(|x| {
-                            x.memory
-                                .map(|m| (x.agents as f64, m.rss_kib as f64 / 1024.0))
-                        })
-                        .collect(),
-                ),
-                series(
-                    "runtime PSS",
-                    0,
-                    false,
-                    ok_rt
-                        .iter()
-                        .filter_map(|x| {
-                            x.memory
-                                .map(|m| (x.agents as f64, m.pss_kib as f64 / 1024.0))
-                        })
-                        .collect(),
-                ),
-                series(
-                    "floor PSS",
-                    1,
-                    false,
-                    ok_fl
-                        .iter()
-                        .filter_map(|(f, _)| {
-                            f.memory
-                                .map(|m| (f.agents as f64, m.pss_kib as f64 / 1024.0))
-                        })
-                        .collect(),
-                ),
-            ],
+            series: each("", false, &|t| t.startup_ms),
             legend: Legend::UpperLeft,
         },
     ];

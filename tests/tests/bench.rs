@@ -351,3 +351,109 @@ fn ctrl_c_stops_a_bench_and_leaves_nothing() {
     }
     assert!(processes_of(&ids).is_empty());
 }
+
+/// `--peers uds,zenoh` (issue 34): each round runs the runtime, then the floor's lock-step
+/// over Unix sockets and over Zenoh; their rows have every tick, CPU and memory, and the
+/// iceoryx2 floor, not asked for, does not run.
+#[test]
+fn bench_swarm_runs_the_peer_floors() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out_dir = tmp.path().join("peers");
+    let out = swarm(
+        &[
+            "bench",
+            "swarm",
+            "--agents",
+            "3",
+            "--ticks",
+            "20",
+            "--peers",
+            "uds,zenoh",
+            "--in-process-agents",
+            "5",
+            "--in-process-ticks",
+            "1",
+            "--json",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ],
+        LIMIT,
+    );
+    let v = json_of(&out);
+    assert_eq!(
+        v["floor"].as_array().unwrap().len(),
+        0,
+        "no iox2 floor: {v}"
+    );
+    let peers = v["peers"].as_array().expect("peers");
+    assert_eq!(peers.len(), 2, "{v}");
+    for (row, name) in peers.iter().zip(["uds", "zenoh"]) {
+        assert_eq!(row["peer"], name, "{row}");
+        assert!(row["error"].is_null(), "{name}: {}", row["error"]);
+        assert_eq!(row["agents"], 3);
+        assert_eq!(row["round"], 1);
+        assert_eq!(row["result"]["ticks"], 20, "{row}");
+        assert_eq!(row["result"]["tick_ns"]["samples"], 20, "{row}");
+        positive(&row["ticks_per_s"], &format!("{name} ticks/s"));
+        positive(&row["result"]["tick_ns"]["p99"], &format!("{name} p99"));
+        assert_eq!(row["memory"]["processes"], 4, "world + 3 robots: {row}");
+        positive(&row["memory"]["pss_kib"], &format!("{name} PSS"));
+        positive(&row["cpu"]["ms_per_tick"], &format!("{name} CPU per tick"));
+    }
+    positive(
+        &v["runtime"][0]["cpu"]["ms_per_tick"],
+        "runtime CPU per tick",
+    );
+    let names: Vec<&str> = v["transports"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t["transport"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["runtime", "uds", "zenoh"]);
+    assert!(out_dir.join("swarm.png").exists());
+    assert_nothing_left(&v);
+}
+
+/// A peer robot that dies mid-run (`--peer-fault 1@5`, hidden) makes its row an error that
+/// names it, through the world's watchdog; the bench goes on and leaves nothing behind.
+#[test]
+fn bench_swarm_a_dead_peer_robot_fails_its_row() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out_dir = tmp.path().join("fault");
+    let out = swarm(
+        &[
+            "bench",
+            "swarm",
+            "--agents",
+            "3",
+            "--ticks",
+            "20",
+            "--peers",
+            "uds,zenoh",
+            "--peer-fault",
+            "1@5",
+            "--in-process-agents",
+            "5",
+            "--in-process-ticks",
+            "1",
+            "--json",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ],
+        LIMIT,
+    );
+    let v = json_of(&out);
+    let peers = v["peers"].as_array().expect("peers");
+    assert_eq!(peers.len(), 2, "{v}");
+    for row in peers {
+        let err = row["error"].as_str().unwrap_or_else(|| panic!("{row}"));
+        assert!(err.contains("robot 1"), "{err}");
+        assert!(row["result"].is_null(), "{row}");
+    }
+    assert!(
+        v["runtime"][0]["error"].is_null(),
+        "the runtime is not faulted"
+    );
+    assert_nothing_left(&v);
+}

@@ -476,7 +476,7 @@ fn counting_robots(
         (0..n as u32)
             .map(|r| {
                 swarmrt_scenario::program::program_of(cfg, r).is_none()
-                    && !hosts.is_some_and(|f| f.host_of(r).is_some())
+                    && hosts.is_none_or(|f| f.host_of(r).is_none())
             })
             .collect(),
     )
