@@ -48,6 +48,60 @@ pub struct FloorResult {
     pub world_fds: usize,
 }
 
+/// What a floor world measures while it ticks, the iceoryx2 floor and the peer floors alike:
+/// each tick's publish and wait, and one pause between two ticks for the parent's memory and
+/// CPU reading (at [`SAMPLE_TICK`], or the last tick of a shorter run).
+pub struct FloorClock {
+    ticks: u64,
+    tick_ns: Vec<u64>,
+    publish_sum: u128,
+    wait_sum: u128,
+    world_fds: Option<usize>,
+}
+
+impl FloorClock {
+    /// A clock for a run of `ticks` ticks.
+    pub fn new(ticks: u64) -> FloorClock {
+        FloorClock {
+            ticks,
+            tick_ns: Vec::with_capacity(ticks as usize),
+            publish_sum: 0,
+            wait_sum: 0,
+            world_fds: None,
+        }
+    }
+
+    /// Tick `tick` started at `t0`, had handed every robot its slot at `t1` and had every
+    /// answer at `t2`. Pauses for the reading once, outside the timing.
+    pub fn tick(&mut self, tick: u64, t0: Instant, t1: Instant, t2: Instant) -> anyhow::Result<()> {
+        self.tick_ns.push((t2 - t0).as_nanos() as u64);
+        self.publish_sum += (t1 - t0).as_nanos();
+        self.wait_sum += (t2 - t1).as_nanos();
+        if self.world_fds.is_none() && (tick + 1 >= SAMPLE_TICK || tick + 1 == self.ticks) {
+            self.world_fds = Some(own_fds());
+            say(&ChildMsg::Progress)?;
+            let mut line = String::new();
+            std::io::stdin().read_line(&mut line)?;
+        }
+        Ok(())
+    }
+
+    /// The world's result, for `robots` robots that were all ready after `startup_ms`.
+    pub fn result(mut self, robots: usize, startup_ms: f64) -> FloorResult {
+        let count = self.ticks.max(1) as f64;
+        FloorResult {
+            robots,
+            ticks: self.ticks,
+            startup_ms,
+            secs: self.tick_ns.iter().sum::<u64>() as f64 / 1e9,
+            tick_ns: summarize(&mut self.tick_ns),
+            publish_ns_mean: self.publish_sum as f64 / count,
+            wait_ns_mean: self.wait_sum as f64 / count,
+            world_fds: self.world_fds.unwrap_or_else(own_fds),
+        }
+    }
+}
+
 /// The floor world child.
 pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
     if let Err(e) = proto_ipc::raise_fd_limit() {
@@ -94,10 +148,7 @@ pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
 
     let obs: Vec<Observation> = (0..n as u32).map(|i| Observation::empty(i, 0)).collect();
     let mut answered = vec![u64::MAX; n];
-    let mut tick_ns = Vec::with_capacity(ticks as usize);
-    let (mut publish_sum, mut wait_sum) = (0u128, 0u128);
-    let mut world_fds = 0;
-    let mut sampled = false;
+    let mut clock = FloorClock::new(ticks);
     for tick in 0..ticks {
         let t0 = Instant::now();
         let sample = iox(publisher.loan_slice_uninit(n), "loan")?;
@@ -132,23 +183,9 @@ pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
             }
             iox(listener.timed_wait(|_| {}, PEER_TIMEOUT - waited), "wait")?;
         }
-        let t2 = Instant::now();
-        tick_ns.push((t2 - t0).as_nanos() as u64);
-        publish_sum += (t1 - t0).as_nanos();
-        wait_sum += (t2 - t1).as_nanos();
         // As the runtime is read at its world's report of this tick: the parent reads
         // memory now, while this world waits (between ticks, outside the timing).
-        if !sampled && (tick + 1 >= SAMPLE_TICK || tick + 1 == ticks) {
-            sampled = true;
-            world_fds = own_fds();
-            say(&ChildMsg::Progress)?;
-            let mut line = String::new();
-            std::io::stdin().read_line(&mut line)?;
-        }
-    }
-    let secs = tick_ns.iter().sum::<u64>() as f64 / 1e9;
-    if !sampled {
-        world_fds = own_fds();
+        clock.tick(tick, t0, t1, Instant::now())?;
     }
     let sample = iox(publisher.loan_slice_uninit(0), "loan")?;
     let mut sample = sample.write_from_slice(&[]);
@@ -159,19 +196,8 @@ pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
     };
     iox(sample.send(), "send")?;
     iox(notifier.notify(), "notify")?;
-    let count = ticks.max(1) as f64;
-    let result = FloorResult {
-        robots: n,
-        ticks,
-        startup_ms,
-        secs,
-        tick_ns: summarize(&mut tick_ns),
-        publish_ns_mean: publish_sum as f64 / count,
-        wait_ns_mean: wait_sum as f64 / count,
-        world_fds,
-    };
     say(&ChildMsg::Result {
-        value: serde_json::to_value(result)?,
+        value: serde_json::to_value(clock.result(n, startup_ms))?,
     })
 }
 

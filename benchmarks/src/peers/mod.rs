@@ -32,9 +32,7 @@ use swarmrt_protocol::{Command, CommandKind, Observation, PROTOCOL_VERSION};
 
 use crate::PEER_TIMEOUT;
 use crate::child::{ChildMsg, say};
-use crate::fanout::own_fds;
-use crate::floor::{FloorResult, SAMPLE_TICK};
-use crate::stats::summarize;
+use crate::floor::FloorClock;
 
 /// A transport of `swarm bench swarm --peers`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -237,7 +235,7 @@ pub fn startup_limit(n: usize) -> Duration {
 
 /// The world's lock-step over `link`, as [`crate::floor::world`] does it over
 /// iceoryx2: hellos, `ticks` ticks (each: write the tick into every slot, send each robot
-/// its slot, wait for every answer), the pause for the memory reading at [`SAMPLE_TICK`],
+/// its slot, wait for every answer), the pause for the memory reading at [`crate::floor::SAMPLE_TICK`],
 /// the shutdown message.
 pub fn drive(link: &mut dyn WorldLink, what: &str, n: usize, ticks: u64) -> anyhow::Result<()> {
     let ready_at = Instant::now();
@@ -267,10 +265,7 @@ pub fn drive(link: &mut dyn WorldLink, what: &str, n: usize, ticks: u64) -> anyh
 
     let mut slots: Vec<Vec<u8>> = (0..n as u32).map(obs_slot).collect();
     let mut answered = vec![u64::MAX; n];
-    let mut tick_ns = Vec::with_capacity(ticks as usize);
-    let (mut publish_sum, mut wait_sum) = (0u128, 0u128);
-    let mut world_fds = 0;
-    let mut sampled = false;
+    let mut clock = FloorClock::new(ticks);
     for tick in 0..ticks {
         let t0 = Instant::now();
         for (i, slot) in slots.iter_mut().enumerate() {
@@ -299,40 +294,15 @@ pub fn drive(link: &mut dyn WorldLink, what: &str, n: usize, ticks: u64) -> anyh
                 }
             })?;
         }
-        let t2 = Instant::now();
-        tick_ns.push((t2 - t0).as_nanos() as u64);
-        publish_sum += (t1 - t0).as_nanos();
-        wait_sum += (t2 - t1).as_nanos();
         // As the iceoryx2 floor: the parent reads memory and CPU now, between two ticks.
-        if !sampled && (tick + 1 >= SAMPLE_TICK || tick + 1 == ticks) {
-            sampled = true;
-            world_fds = own_fds();
-            say(&ChildMsg::Progress)?;
-            let mut line = String::new();
-            std::io::stdin().read_line(&mut line)?;
-        }
-    }
-    let secs = tick_ns.iter().sum::<u64>() as f64 / 1e9;
-    if !sampled {
-        world_fds = own_fds();
+        clock.tick(tick, t0, t1, Instant::now())?;
     }
     for (i, slot) in slots.iter_mut().enumerate() {
         set_obs_tick(slot, SHUTDOWN);
         link.send(i as u32, slot)?;
     }
-    let count = ticks.max(1) as f64;
-    let result = FloorResult {
-        robots: n,
-        ticks,
-        startup_ms,
-        secs,
-        tick_ns: summarize(&mut tick_ns),
-        publish_ns_mean: publish_sum as f64 / count,
-        wait_ns_mean: wait_sum as f64 / count,
-        world_fds,
-    };
     say(&ChildMsg::Result {
-        value: serde_json::to_value(result)?,
+        value: serde_json::to_value(clock.result(n, startup_ms))?,
     })
 }
 
@@ -533,10 +503,7 @@ mod tests {
 
     #[test]
     fn live_cpu_reads_this_process() {
-        let start = Instant::now();
-        while start.elapsed() < Duration::from_millis(30) {
-            std::hint::spin_loop();
-        }
+        crate::spin_for(Duration::from_millis(30));
         let secs = live_cpu_secs(&[std::process::id()]);
         assert!(secs >= 0.02, "{secs}");
         assert_eq!(live_cpu_secs(&[u32::MAX]), 0.0);
