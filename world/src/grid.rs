@@ -9,6 +9,9 @@ pub struct Grid {
     rows: usize,
     starts: Vec<u32>,
     items: Vec<u32>,
+    /// `points[items[k]]` for each `k`: queries scan these contiguously instead of looking
+    /// each index up in the caller's scattered data.
+    item_points: Vec<(f64, f64)>,
     /// Scratch for [`Grid::rebuild`], kept to reuse its allocation.
     fill: Vec<u32>,
 }
@@ -23,6 +26,7 @@ impl Default for Grid {
             rows: 1,
             starts: vec![0, 0],
             items: Vec::new(),
+            item_points: Vec::new(),
             fill: Vec::new(),
         }
     }
@@ -83,10 +87,14 @@ impl Grid {
         self.fill.extend_from_slice(counts);
         self.items.clear();
         self.items.resize(len, 0);
+        self.item_points.clear();
+        self.item_points.resize(len, (0.0, 0.0));
         for (i, p) in points.iter().enumerate() {
             if keep(i) {
                 let k = idx(p);
-                self.items[self.fill[k] as usize] = i as u32;
+                let at = self.fill[k] as usize;
+                self.items[at] = i as u32;
+                self.item_points[at] = *p;
                 self.fill[k] += 1;
             }
         }
@@ -106,6 +114,12 @@ impl Grid {
     /// Calls `f` with every index whose cell overlaps the disc (`c`, `r`); the caller checks
     /// the exact distance. Order is by cell, then insertion: sort if order matters.
     pub fn near(&self, c: (f64, f64), r: f64, mut f: impl FnMut(usize)) {
+        self.near_points(c, r, |i, _| f(i));
+    }
+
+    /// [`Grid::near`], with each index's point as given to [`Grid::rebuild`] (the same bits),
+    /// read from the grid's own contiguous copy.
+    pub fn near_points(&self, c: (f64, f64), r: f64, mut f: impl FnMut(usize, (f64, f64))) {
         let lo_c = ((c.0 - r - self.origin.0) / self.cell).floor();
         let hi_c = ((c.0 + r - self.origin.0) / self.cell).floor();
         let lo_r = ((c.1 - r - self.origin.1) / self.cell).floor();
@@ -117,12 +131,13 @@ impl Grid {
         let c1 = (hi_c as usize).min(self.cols - 1);
         let r0 = lo_r.max(0.0) as usize;
         let r1 = (hi_r as usize).min(self.rows - 1);
+        // The cells c0..=c1 of a row are neighbours in `items`: one contiguous run per row,
+        // in the same order as cell by cell.
         for row in r0..=r1 {
-            for col in c0..=c1 {
-                let k = row * self.cols + col;
-                for &i in &self.items[self.starts[k] as usize..self.starts[k + 1] as usize] {
-                    f(i as usize);
-                }
+            let from = self.starts[row * self.cols + c0] as usize;
+            let to = self.starts[row * self.cols + c1 + 1] as usize;
+            for (&i, &p) in self.items[from..to].iter().zip(&self.item_points[from..to]) {
+                f(i as usize, p);
             }
         }
     }

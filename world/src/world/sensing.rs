@@ -54,6 +54,7 @@ impl World {
             rb_range,
             radius,
             reach,
+            reach_sq: reach_sq(reach),
             noise: self.cfg.robots.noise,
             cfg: &self.cfg,
             goal_sensor: self.cfg.robots.goal_sensor,
@@ -148,6 +149,8 @@ struct ObserveCtx<'a> {
     rb_range: f64,
     radius: f64,
     reach: f64,
+    /// [`reach_sq`] of `reach`.
+    reach_sq: f64,
     noise: swarmrt_scenario::NoiseConfig,
     /// For each robot's goal ([`swarmrt_scenario::Config::goal_of`]).
     cfg: &'a swarmrt_scenario::Config,
@@ -169,6 +172,8 @@ impl ObserveCtx<'_> {
             near,
             picked,
             bodies,
+            spare,
+            counts,
         } = scratch;
         let (lidar, rb_range, radius, reach) = (self.lidar, self.rb_range, self.radius, self.reach);
         let (noise, goal_sensor) = (self.noise, self.goal_sensor);
@@ -188,10 +193,14 @@ impl ObserveCtx<'_> {
             return;
         }
         near.clear();
-        self.grid.near((r.x, r.y), reach, |j| {
-            if j != i {
-                let q = &self.robots[j];
-                let d = ((q.x - r.x).powi(2) + (q.y - r.y).powi(2)).sqrt();
+        // Most candidates of the grid lie outside the disc: their squared distance, a hair
+        // above reach^2 (see `reach_sq`), rules them out without a square root. The distance
+        // of those kept is the same expression as ever.
+        let reach_sq = self.reach_sq;
+        self.grid.near_points((r.x, r.y), reach, |j, (qx, qy)| {
+            let d_sq = (qx - r.x).powi(2) + (qy - r.y).powi(2);
+            if d_sq <= reach_sq && j != i {
+                let d = d_sq.sqrt();
                 if d <= reach {
                     near.push((d, j as u32));
                 }
@@ -213,12 +222,13 @@ impl ObserveCtx<'_> {
                 near.iter()
                     .filter(|&&(dc, _)| dc - radius <= lidar.range + LIDAR_SKIP_MARGIN),
             );
-            picked.sort_unstable_by_key(by_distance);
+            sort_by_distance(picked, reach, spare, counts);
             bodies.clear();
             bodies.extend(picked.iter().map(|&(dc, j)| {
                 let q = &self.robots[j as usize];
                 Body::new((r.x, r.y), (q.x, q.y), radius, dc)
             }));
+            let mut clearance = None;
             for k in 0..rays {
                 let angle = r.theta + self.ray_angles[k];
                 let dir = (angle.cos(), angle.sin());
@@ -234,7 +244,13 @@ impl ObserveCtx<'_> {
                         d = d.min(t);
                     }
                 }
-                if let Some(t) = self.map.cast_dir((r.x, r.y), dir, d) {
+                // A map hit is at least the robot's clearance away (up to rounding far below
+                // the margin), so a ray already stopped nearer cannot find one: the cast
+                // would say None. In a crowd most rays end on a neighbour.
+                let clear = *clearance.get_or_insert_with(|| self.map.clearance((r.x, r.y)));
+                if d + LIDAR_SKIP_MARGIN >= clear
+                    && let Some(t) = self.map.cast_dir((r.x, r.y), dir, d)
+                {
                     d = d.min(t);
                 }
                 let d = (d + gauss(rng, noise.lidar)).clamp(0.0, lidar.range);
@@ -297,6 +313,19 @@ impl ObserveCtx<'_> {
     }
 }
 
+/// A bound on squared distances within `reach`: `sqrt(d_sq) <= reach` implies
+/// `d_sq <= reach_sq(reach)` (a correctly rounded square root at or below `reach` comes from a
+/// `d_sq` at most an ulp or so above `reach^2`; the bound leaves 1e-9 relative). Infinite,
+/// which rules nothing out, where `reach^2` would lose precision.
+fn reach_sq(reach: f64) -> f64 {
+    let sq = reach * reach * (1.0 + 1e-9);
+    if reach >= 1e-100 && sq.is_finite() {
+        sq
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Metres a robot body's nearest point must lie beyond a ray's best hit before the ray stops
 /// testing bodies (rounding in [`Body::hit`] is ~1e-15 m at these distances).
 const LIDAR_SKIP_MARGIN: f64 = 1e-9;
@@ -310,6 +339,56 @@ struct Scratch {
     picked: Vec<(f64, u32)>,
     /// The lidar's bodies, nearest first.
     bodies: Vec<Body>,
+    /// Scratch of [`sort_by_distance`].
+    spare: Vec<(f64, u32)>,
+    /// Scratch of [`sort_by_distance`].
+    counts: Vec<u32>,
+}
+
+/// Sorts `v` by (distance, id), as `sort_unstable_by_key` with `(d.to_bits(), id)` does (the
+/// same order: ids are distinct), for distances in `[0, reach]`. Bucketed first by `d^2` (a
+/// robot's neighbours spread evenly over the disc's area, so about one per bucket; the
+/// bucket never decreases as `d` grows, rounding included), then each bucket sorted: O(n)
+/// instead of O(n log n) for the ~60 robots within lidar reach in a crowd.
+fn sort_by_distance(
+    v: &mut Vec<(f64, u32)>,
+    reach: f64,
+    spare: &mut Vec<(f64, u32)>,
+    counts: &mut Vec<u32>,
+) {
+    let by_distance = |&(d, j): &(f64, u32)| (d.to_bits(), j);
+    let n = v.len();
+    let scale = n as f64 / (reach * reach);
+    if n < 16 || !(scale.is_finite() && scale > 0.0) {
+        v.sort_unstable_by_key(by_distance);
+        return;
+    }
+    let bucket = |d: f64| ((d * d * scale) as usize).min(n - 1);
+    counts.clear();
+    counts.resize(n + 1, 0);
+    for &(d, _) in v.iter() {
+        counts[bucket(d) + 1] += 1;
+    }
+    for b in 1..=n {
+        counts[b] += counts[b - 1];
+    }
+    spare.clear();
+    spare.resize(n, (0.0, 0));
+    for &e in v.iter() {
+        let b = bucket(e.0);
+        spare[counts[b] as usize] = e;
+        counts[b] += 1;
+    }
+    // counts[b] is now the end of bucket b (and the start of bucket b + 1).
+    let mut start = 0;
+    for &end in &counts[..n] {
+        let end = end as usize;
+        if end - start > 1 {
+            spare[start..end].sort_unstable_by_key(by_distance);
+        }
+        start = end;
+    }
+    std::mem::swap(v, spare);
 }
 
 /// Another robot's body as the lidar rays of one robot see it: the parts of the ray-circle
@@ -356,5 +435,45 @@ fn circle_root(b: f64, disc: f64) -> Option<f64> {
         Some(0.0)
     } else {
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sort_by_distance_orders_as_the_comparison_sort() {
+        let mut spare = Vec::new();
+        let mut counts = Vec::new();
+        let mut seed = 7u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for n in [0, 1, 5, 15, 16, 17, 60, 300] {
+            for reach in [0.5, 3.15, 40.0] {
+                // Distances in [0, reach], some repeated, some at the ends, in any id order.
+                let mut v: Vec<(f64, u32)> = (0..n as u32)
+                    .map(|j| {
+                        let d = match next() % 8 {
+                            0 => 0.0,
+                            1 => reach,
+                            2 => reach * 0.5,
+                            _ => reach * (next() % 1_000_001) as f64 / 1e6,
+                        };
+                        (d, j * 7 % 1009)
+                    })
+                    .collect();
+                let mut want = v.clone();
+                want.sort_unstable_by_key(|&(d, j)| (d.to_bits(), j));
+                sort_by_distance(&mut v, reach, &mut spare, &mut counts);
+                let bits =
+                    |v: &[(f64, u32)]| v.iter().map(|&(d, j)| (d.to_bits(), j)).collect::<Vec<_>>();
+                assert_eq!(bits(&v), bits(&want), "n {n} reach {reach}");
+            }
+        }
     }
 }
