@@ -46,7 +46,7 @@ use faults::Outage;
 pub use faults::ProcessSignal;
 pub use rounds::RoundStats;
 use rounds::Rounds;
-pub use sensing::{OBSERVE_THREADS, PARALLEL_OBSERVE_MIN, worker_threads};
+pub use sensing::{OBSERVE_CHUNK, OBSERVE_THREADS, PARALLEL_OBSERVE_MIN, worker_threads};
 pub use stage_times::{Stage, StageTimes};
 use stall::StallWatch;
 pub use stall::Stalled;
