@@ -6,12 +6,32 @@ use swarmrt_agent::consensus::raft::{MutantScope, Persistent};
 use swarmrt_protocol::{Command, Observation, RobotState};
 use swarmrt_scenario::Config;
 use swarmrt_world::map::MapError;
-use swarmrt_world::world::worker_threads;
+use swarmrt_world::world::{PARALLEL_OBSERVE_MIN, worker_threads};
 use swarmrt_world::{Event, ProcessSignal, World};
 
-/// Robots from which [`Lockstep::think`] splits them over threads: a robot thinks in ~1-2 us
-/// (observing takes several times that), so below this a thread costs more than it saves.
-pub const PARALLEL_THINK_MIN: usize = 256;
+/// One robot's part of an answer: its core, its stable storage and its command slot.
+type Answering<'a> = (
+    &'a mut Agent,
+    &'a mut Option<Persistent>,
+    &'a mut Option<Command>,
+);
+
+/// Robot `o.robot` answers its observation, if its process would run: its command, and with
+/// storage on, the persistent state its process would have written first.
+fn answer(
+    agent: &mut Agent,
+    o: &Observation,
+    stored: &mut Option<Persistent>,
+    command: &mut Option<Command>,
+    storing: bool,
+) {
+    if RobotState::from_u8(o.state).is_some_and(RobotState::expects_command) {
+        *command = Some(agent.step(o));
+        if storing {
+            *stored = agent.consensus().and_then(|c| c.persistent());
+        }
+    }
+}
 
 /// A world and its robots, stepped tick by tick.
 pub struct Lockstep {
@@ -24,6 +44,8 @@ pub struct Lockstep {
     /// process would have written before sending this tick's command.
     stored: Vec<Option<Persistent>>,
     storing: bool,
+    /// Whether the robots answered the last observations already (in [`Lockstep::observe`]).
+    answered: bool,
 }
 
 impl Lockstep {
@@ -40,6 +62,7 @@ impl Lockstep {
             commands: Vec::with_capacity(n),
             stored: vec![None; n],
             storing: swarmrt_agent::consensus::stores_state(cfg),
+            answered: false,
         })
     }
 
@@ -58,10 +81,22 @@ impl Lockstep {
         &self.agents
     }
 
+    /// Every robot's observation of the current tick, as the last [`Lockstep::observe`]
+    /// filled it.
+    pub fn observations(&self) -> &[Observation] {
+        &self.obs
+    }
+
     /// The first phase of a tick: carry out the process faults due (there is no process to
     /// signal: a kill or freeze already changed the world's state; a restart starts the
     /// robot's brain afresh, as a new process would, from its stored state if it keeps one),
     /// then fill every observation.
+    ///
+    /// Each robot also answers its observation here, right after the world filled it and on
+    /// the same thread ([`World::observe_then`]), while it is still in cache; the answers
+    /// wait for [`Lockstep::think`]. A robot's answer reads only its own observation and
+    /// state, which nothing changes between the two phases, so they are the commands
+    /// `think` would compute, the same bytes whichever thread computed them.
     pub fn observe(&mut self) {
         for signal in self.world.take_signals() {
             if let ProcessSignal::Restart { robot, incarnation } = signal {
@@ -72,64 +107,49 @@ impl Lockstep {
                 };
             }
         }
-        self.world.observe(&mut self.obs);
-    }
-
-    /// The second phase: every robot whose process would run answers its observation (and,
-    /// with storage on, makes its persistent state durable first, as its process does).
-    ///
-    /// From [`PARALLEL_THINK_MIN`] robots on, the robots are split into contiguous ranges
-    /// that think on scoped threads, as [`World::observe`] splits them: each robot's core reads
-    /// only its own observation and state, so the commands are the same bytes in any split.
-    pub fn think(&mut self) {
         let n = self.agents.len();
         self.commands.clear();
         self.commands.resize(n, None);
         let storing = self.storing;
-        let threads = worker_threads(n, PARALLEL_THINK_MIN);
-        let think = |agents: &mut [Agent],
-                     obs: &[Observation],
-                     stored: &mut [Option<Persistent>],
-                     commands: &mut [Option<Command>]| {
-            for (((a, o), stored), cmd) in agents.iter_mut().zip(obs).zip(stored).zip(commands) {
-                if RobotState::from_u8(o.state).is_some_and(RobotState::expects_command) {
-                    *cmd = Some(a.step(o));
-                    if storing {
-                        *stored = a.consensus().and_then(|c| c.persistent());
-                    }
-                }
-            }
-        };
-        if threads <= 1 {
-            think(
-                &mut self.agents,
-                &self.obs,
-                &mut self.stored,
-                &mut self.commands,
-            );
+        // The Raft mutant selection (tests) is carried onto the observing threads.
+        let mutant = MutantScope::current();
+        let mut robots: Vec<Answering<'_>> = self
+            .agents
+            .iter_mut()
+            .zip(&mut self.stored)
+            .zip(&mut self.commands)
+            .map(|((agent, stored), command)| (agent, stored, command))
+            .collect();
+        let threads = worker_threads(n, PARALLEL_OBSERVE_MIN);
+        self.world
+            .observe_then(&mut self.obs, &mut robots, threads, |_, o, robot| {
+                mutant.enter();
+                let (agent, stored, command) = robot;
+                answer(agent, o, stored, command, storing);
+            });
+        self.answered = true;
+    }
+
+    /// The second phase: every robot whose process would run answers its observation (and,
+    /// with storage on, makes its persistent state durable first, as its process does).
+    /// [`Lockstep::observe`] has already had them answer; this computes the answers only when
+    /// it has not.
+    pub fn think(&mut self) {
+        if std::mem::take(&mut self.answered) {
             return;
         }
-        let chunk = n.div_ceil(threads);
-        let mutant = MutantScope::current();
-        std::thread::scope(|s| {
-            let mut parts = self
-                .agents
-                .chunks_mut(chunk)
-                .zip(self.obs.chunks(chunk))
-                .zip(self.stored.chunks_mut(chunk))
-                .zip(self.commands.chunks_mut(chunk));
-            let first = parts.next();
-            for (((agents, obs), stored), commands) in parts {
-                let think = &think;
-                s.spawn(move || {
-                    mutant.enter();
-                    think(agents, obs, stored, commands)
-                });
-            }
-            if let Some((((agents, obs), stored), commands)) = first {
-                think(agents, obs, stored, commands);
-            }
-        });
+        let n = self.agents.len();
+        self.commands.clear();
+        self.commands.resize(n, None);
+        for (((a, o), stored), cmd) in self
+            .agents
+            .iter_mut()
+            .zip(&self.obs)
+            .zip(&mut self.stored)
+            .zip(&mut self.commands)
+        {
+            answer(a, o, stored, cmd, self.storing);
+        }
     }
 
     /// The third phase (`radio.rounds` > 0 only): the tick's propagation rounds. Each round
