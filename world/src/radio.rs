@@ -461,6 +461,11 @@ impl RadioMedium {
             });
         }
 
+        if let Some(threads) = self.send_threads() {
+            self.send_parallel(tick, outboxes, positions, can_talk, threads);
+            return;
+        }
+
         let mut receivers = std::mem::take(&mut self.scratch);
         for src in 0..n {
             if !can_talk[src] {
@@ -723,6 +728,9 @@ impl RadioMedium {
         self.stats
     }
 }
+
+mod parallel;
+pub use parallel::PARALLEL_SEND_MIN;
 
 #[cfg(test)]
 mod tests;

@@ -918,3 +918,54 @@ fn odd_ranges_and_positions_route_like_brute_force() {
         assert_eq!(routed, expected, "range {range}");
     }
 }
+
+/// A crowd big enough for the parallel send (when the machine has the cores), against the
+/// same sends while recording, which always takes the one-thread path: the same inboxes in
+/// the same order and the same counters, with unicasts to anyone, robots that stop talking,
+/// full inboxes and a partition.
+#[test]
+fn a_crowd_routed_on_threads_matches_the_one_thread_path() {
+    let n = PARALLEL_SEND_MIN + 300;
+    for delay_ticks in [0, 2] {
+        let cfg = RadioConfig {
+            range: 6.0,
+            delay_ticks,
+            ..base_cfg()
+        };
+        let mut r = rng::stream(5, "radio-test-crowd", delay_ticks as u64);
+        let pos: Vec<(f64, f64)> = (0..n)
+            .map(|_| (r.random_range(0.0..40.0), r.random_range(0.0..40.0)))
+            .collect();
+        let mut threaded = RadioMedium::new(cfg, 9, n);
+        let mut single = RadioMedium::new(cfg, 9, n);
+        single.set_recording(true);
+        for t in 0..12u64 {
+            let talk: Vec<bool> = (0..n).map(|_| r.random::<f64>() < 0.95).collect();
+            let groups = (t % 4 == 3).then(|| (0..n).map(|i| (i % 3) as u64).collect());
+            threaded.set_groups(groups.clone());
+            single.set_groups(groups);
+            let out: Vec<Vec<Frame>> = (0..n)
+                .map(|i| {
+                    (0..r.random_range(0..=6u32))
+                        .map(|k| {
+                            let dst = if r.random::<f64>() < 0.7 {
+                                BROADCAST
+                            } else {
+                                r.random_range(0..n as u32 + 5)
+                            };
+                            frame(dst, (t as u32) << 20 | (i as u32) << 4 | k)
+                        })
+                        .collect()
+                })
+                .collect();
+            send(&mut threaded, t, &out, &pos, &talk);
+            send(&mut single, t, &out, &pos, &talk);
+            let a = deliver(&mut threaded, t + 1, &talk);
+            let b = deliver(&mut single, t + 1, &talk);
+            assert!(a == b, "tick {t}: an inbox differs");
+            assert_eq!(threaded.stats(), single.stats(), "tick {t}");
+        }
+        assert!(threaded.stats().dropped_inbox_full > 0);
+        assert!(threaded.stats().dropped_partition > 0);
+    }
+}
