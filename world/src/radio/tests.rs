@@ -933,8 +933,10 @@ fn a_crowd_routed_on_threads_matches_the_one_thread_path() {
             ..base_cfg()
         };
         let mut r = rng::stream(5, "radio-test-crowd", delay_ticks as u64);
+        // Half a robot per square metre: ~55 within range.
+        let side = (n as f64 / 0.5).sqrt();
         let pos: Vec<(f64, f64)> = (0..n)
-            .map(|_| (r.random_range(0.0..40.0), r.random_range(0.0..40.0)))
+            .map(|_| (r.random_range(0.0..side), r.random_range(0.0..side)))
             .collect();
         let mut threaded = RadioMedium::new(cfg, 9, n);
         let mut single = RadioMedium::new(cfg, 9, n);
