@@ -1,5 +1,6 @@
 //! `World::observe` splits large swarms over threads: every thread count gives the same
-//! observations, tick after tick, with noise on (each robot draws from its own stream).
+//! observations, tick after tick, with noise on (each robot draws from its own stream), into
+//! slots that held anything before, and `World::observe_each` hands over the same.
 
 use swarmrt_agent::RadioMsg;
 use swarmrt_agent::behaviours::goto::Beacon;
@@ -29,14 +30,40 @@ loss = 0.1
     Config::from_toml_str("threads.toml", text, &[]).unwrap()
 }
 
-fn run(threads: usize) -> Vec<Vec<Observation>> {
+/// How the observations are asked for.
+#[derive(Clone, Copy)]
+enum Mode {
+    /// `observe_on` into slots that start empty.
+    Slots,
+    /// `observe_on` into slots that start full of another observation's bytes.
+    Dirty,
+    /// `observe_each`, copying what it hands over.
+    Each,
+}
+
+fn run(threads: usize, mode: Mode) -> Vec<Vec<Observation>> {
     let cfg = config();
     let mut world = World::new(&cfg, VOCABULARY).unwrap();
     let n = cfg.robots.count as usize;
     let mut obs = vec![Observation::empty(0, 0); n];
+    if let Mode::Dirty = mode {
+        let mut dirt = Observation::empty(7, 99);
+        dirt.lidar = [1.5; swarmrt_protocol::MAX_LIDAR_RAYS];
+        dirt.neighbours[..].iter_mut().for_each(|nb| nb.range = 2.5);
+        dirt.inbox[..].iter_mut().for_each(|f| f.len = 3);
+        dirt.goal_visible = 1;
+        dirt.z = 4.0;
+        obs.fill(dirt);
+    }
     let mut seen = Vec::new();
     for _ in 0..12 {
-        world.observe_on(&mut obs, threads);
+        match mode {
+            Mode::Slots | Mode::Dirty => world.observe_on(&mut obs, threads),
+            Mode::Each => world.observe_each(&mut obs, threads, |i, o, slot| {
+                assert_eq!(o.robot as usize, i);
+                *slot = *o;
+            }),
+        }
         seen.push(obs.clone());
         let cmds: Vec<Option<Command>> = obs
             .iter()
@@ -63,14 +90,23 @@ fn run(threads: usize) -> Vec<Vec<Observation>> {
 
 #[test]
 fn observe_gives_the_same_observations_on_any_number_of_threads() {
-    let one = run(1);
+    let one = run(1, Mode::Slots);
     assert!(
         one.iter()
             .flatten()
             .any(|o| o.inbox_len > 0 && o.lidar_len > 0)
     );
-    for threads in [2, 3, 7] {
-        let many = run(threads);
+    for (threads, mode) in [
+        (2, Mode::Slots),
+        (3, Mode::Slots),
+        (7, Mode::Slots),
+        (1, Mode::Dirty),
+        (2, Mode::Dirty),
+        (1, Mode::Each),
+        (2, Mode::Each),
+        (3, Mode::Each),
+    ] {
+        let many = run(threads, mode);
         for (tick, (a, b)) in one.iter().zip(&many).enumerate() {
             for (x, y) in a.iter().zip(b) {
                 assert_eq!(

@@ -51,9 +51,37 @@ impl World {
         threads: usize,
         then: impl Fn(usize, &Observation, &mut T) + Sync,
     ) {
+        assert_eq!(
+            out.len(),
+            self.robots.len(),
+            "one observation slot per robot"
+        );
+        self.observe_inner(Some(out), items, threads, then);
+    }
+
+    /// [`World::observe_then`] without keeping the observations: each thread fills one
+    /// observation of its own per robot and hands it to `then`, which must take what it needs
+    /// from it. The ~6 KB per robot stay in cache instead of going out to a slice of them all
+    /// (60 MB a tick at 10,000 robots). The same bytes reach `then`.
+    pub fn observe_each<T: Send>(
+        &mut self,
+        items: &mut [T],
+        threads: usize,
+        then: impl Fn(usize, &Observation, &mut T) + Sync,
+    ) {
+        self.observe_inner(None, items, threads, then);
+    }
+
+    /// [`World::observe_then`] into `out`, or [`World::observe_each`] when `out` is `None`.
+    fn observe_inner<T: Send>(
+        &mut self,
+        out: Option<&mut [Observation]>,
+        items: &mut [T],
+        threads: usize,
+        then: impl Fn(usize, &Observation, &mut T) + Sync,
+    ) {
         let start = self.stage_times.start();
         let n = self.robots.len();
-        assert_eq!(out.len(), n, "one observation slot per robot");
         assert_eq!(items.len(), n, "one item per robot");
         let positions: Vec<(f64, f64)> = self.robots.iter().map(|r| (r.x, r.y)).collect();
         let lidar = &self.cfg.robots.lidar;
@@ -85,34 +113,45 @@ impl World {
         };
         let rngs = &mut self.sensor_rng[..];
         let work = |first: usize,
-                    outs: &mut [Observation],
+                    mut outs: Option<&mut [Observation]>,
                     rngs: &mut [Rng],
                     items: &mut [T],
+                    own: &mut Observation,
                     scratch: &mut Scratch| {
-            for (k, ((o, rng), item)) in outs.iter_mut().zip(rngs).zip(items).enumerate() {
+            for (k, (rng, item)) in rngs.iter_mut().zip(items).enumerate() {
+                let o = match outs.as_deref_mut() {
+                    Some(outs) => &mut outs[k],
+                    None => &mut *own,
+                };
                 ctx.observe_one(first + k, o, rng, scratch);
                 clear_unused(o);
                 then(first + k, o, item);
             }
         };
+        let own = || Box::new(Observation::empty(0, 0));
         if threads <= 1 || n < 2 {
-            work(0, out, rngs, items, &mut Scratch::default());
+            work(0, out, rngs, items, &mut own(), &mut Scratch::default());
         } else {
-            let chunks: Vec<Mutex<Chunk<'_, T>>> = out
+            let mut outs = out.map(|o| o.chunks_mut(OBSERVE_CHUNK));
+            let chunks: Vec<Mutex<Chunk<'_, T>>> = rngs
                 .chunks_mut(OBSERVE_CHUNK)
-                .zip(rngs.chunks_mut(OBSERVE_CHUNK))
                 .zip(items.chunks_mut(OBSERVE_CHUNK))
-                .map(|((outs, rngs), items)| Mutex::new((outs, rngs, items)))
+                .map(|(rngs, items)| {
+                    let outs = outs.as_mut().and_then(|o| o.next());
+                    Mutex::new((outs, rngs, items))
+                })
                 .collect();
             let next = AtomicUsize::new(0);
             let run = || {
                 let mut scratch = Scratch::default();
+                let mut own = own();
                 loop {
                     let c = next.fetch_add(1, AtomicOrdering::Relaxed);
                     let Some(chunk) = chunks.get(c) else { break };
                     let mut chunk = chunk.lock().unwrap_or_else(|e| e.into_inner());
                     let (outs, rngs, items) = &mut *chunk;
-                    work(c * OBSERVE_CHUNK, outs, rngs, items, &mut scratch);
+                    let outs = outs.as_deref_mut();
+                    work(c * OBSERVE_CHUNK, outs, rngs, items, &mut own, &mut scratch);
                 }
             };
             std::thread::scope(|s| {
@@ -168,7 +207,7 @@ pub const PARALLEL_OBSERVE_MIN: usize = 64;
 pub const OBSERVE_CHUNK: usize = 32;
 /// One piece of [`World::observe_then`]'s work: observation slots, their noise streams and
 /// items.
-type Chunk<'a, T> = (&'a mut [Observation], &'a mut [Rng], &'a mut [T]);
+type Chunk<'a, T> = (Option<&'a mut [Observation]>, &'a mut [Rng], &'a mut [T]);
 /// Most threads [`World::observe`] uses.
 pub const OBSERVE_THREADS: usize = 4;
 
