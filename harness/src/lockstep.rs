@@ -46,6 +46,8 @@ pub struct Lockstep {
     storing: bool,
     /// Whether the robots answered the last observations already (in [`Lockstep::observe`]).
     answered: bool,
+    /// Whether [`Lockstep::observe`] fills `obs` ([`Lockstep::keep_observations`]).
+    keep_observations: bool,
 }
 
 impl Lockstep {
@@ -63,6 +65,7 @@ impl Lockstep {
             stored: vec![None; n],
             storing: swarmrt_agent::consensus::stores_state(cfg),
             answered: false,
+            keep_observations: false,
         })
     }
 
@@ -82,9 +85,17 @@ impl Lockstep {
     }
 
     /// Every robot's observation of the current tick, as the last [`Lockstep::observe`]
-    /// filled it.
+    /// filled it: only while [`Lockstep::keep_observations`] is on or the scenario has
+    /// propagation rounds (otherwise the observations are not kept, and these are older).
     pub fn observations(&self) -> &[Observation] {
         &self.obs
+    }
+
+    /// Keeps every robot's observation for [`Lockstep::observations`] (off when built: the
+    /// robots answer each observation as it is made, and only the propagation rounds read
+    /// them again).
+    pub fn keep_observations(&mut self, on: bool) {
+        self.keep_observations = on;
     }
 
     /// The first phase of a tick: carry out the process faults due (there is no process to
@@ -121,19 +132,26 @@ impl Lockstep {
             .map(|((agent, stored), command)| (agent, stored, command))
             .collect();
         let threads = worker_threads(n, PARALLEL_OBSERVE_MIN);
-        self.world
-            .observe_then(&mut self.obs, &mut robots, threads, |_, o, robot| {
-                mutant.enter();
-                let (agent, stored, command) = robot;
-                answer(agent, o, stored, command, storing);
-            });
+        let then = |_: usize, o: &Observation, robot: &mut Answering<'_>| {
+            mutant.enter();
+            let (agent, stored, command) = robot;
+            answer(agent, o, stored, command, storing);
+        };
+        // The propagation rounds read the observations again (reactions); otherwise nothing
+        // does, and each thread fills one of its own robot after robot.
+        if self.keep_observations || self.world.has_rounds() {
+            self.world
+                .observe_then(&mut self.obs, &mut robots, threads, then);
+        } else {
+            self.world.observe_each(&mut robots, threads, then);
+        }
         self.answered = true;
     }
 
     /// The second phase: every robot whose process would run answers its observation (and,
     /// with storage on, makes its persistent state durable first, as its process does).
     /// [`Lockstep::observe`] has already had them answer; this computes the answers only when
-    /// it has not.
+    /// it has not (from the observations last kept).
     pub fn think(&mut self) {
         if std::mem::take(&mut self.answered) {
             return;
