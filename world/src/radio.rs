@@ -280,11 +280,13 @@ impl Queue {
     }
 }
 
-/// Cell side of the receivers' grid: the range, so a query visits about 3 x 3 cells. Any
-/// positive side finds the same receivers (candidates are filtered by exact distance).
+/// Cell side of the receivers' grid: half the range, so a query visits about 5 x 5 cells
+/// (rows of cells are contiguous, so more cells cost little and keep fewer candidates
+/// outside the disc). Any positive side finds the same receivers (candidates are filtered by
+/// exact distance).
 fn grid_cell(range: f64) -> f64 {
     if range > 0.0 && range.is_finite() {
-        range
+        range / 2.0
     } else {
         1.0
     }
@@ -302,17 +304,33 @@ fn receivers_of(
 ) {
     out.clear();
     let p = positions[src];
-    let visit = |id: usize| {
-        if id != src && in_range(p, positions[id], range) {
-            out.push(id as u32);
-        }
-    };
     if range == f64::INFINITY {
-        grid.each(visit);
+        grid.each(|id| {
+            if id != src && in_range(p, positions[id], range) {
+                out.push(id as u32);
+            }
+        });
     } else {
+        // Squared distances settle all but a hair-thin ring without a square root: below
+        // `inside` the root is surely within range, above `outside` surely not (a correctly
+        // rounded root moves by an ulp or so; the bounds leave 1e-9 relative), and in between
+        // `in_range` decides as ever.
+        let sq = range * range;
+        let (inside, outside) = if range >= 1e-100 && sq.is_finite() {
+            (sq * (1.0 - 1e-9), sq * (1.0 + 1e-9))
+        } else {
+            (f64::NEG_INFINITY, f64::INFINITY)
+        };
         // A hair beyond the range, so that rounding in the cell arithmetic can never leave out
         // a robot `in_range` accepts: candidates are filtered by the exact distance anyway.
-        grid.near(p, range.max(0.0) * (1.0 + 1e-12) + 1e-9, visit);
+        let reach = range.max(0.0) * (1.0 + 1e-12) + 1e-9;
+        grid.near_points(p, reach, |id, q| {
+            let (dx, dy) = (p.0 - q.0, p.1 - q.1);
+            let d_sq = dx * dx + dy * dy;
+            if id != src && d_sq <= outside && (d_sq <= inside || in_range(p, q, range)) {
+                out.push(id as u32);
+            }
+        });
     }
     // The grid reports by cell; routing goes by ascending id. Many receivers among few robots
     // (a dense flock: ~480 of 1,000) are put in order faster by marking them in a bitset
