@@ -108,7 +108,8 @@ pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
         tracing::warn!("cannot raise the open-file limit: {e}");
     }
     let node = bench_node(run, &run.world_node_name())?;
-    let s = proto_ipc::create_services(&node, run, n, 0, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let s = proto_ipc::create_services(&node, run, 0..n as u32, 0, 0)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
     let WorldPorts {
         publisher,
         notifier,
@@ -204,7 +205,7 @@ pub fn world(run: &RunServices, n: usize, ticks: u64) -> anyhow::Result<()> {
 /// The floor robot child: hello, then answer every tick at once until shutdown.
 pub fn agent(run: &RunServices, id: u32) -> anyhow::Result<()> {
     let node = bench_node(run, &run.robot_node_name(id))?;
-    let ports = listening_robot_ports(&node, run)?;
+    let ports = listening_robot_ports(&node, run, id)?;
     let proto_ipc::TickWait::Listener(listener) = &ports.wait else {
         bail!("the floor robot has no listener");
     };

@@ -195,8 +195,9 @@ pub fn world_ports(
 pub fn robot_ports(
     node: &iceoryx2::node::Node<Svc>,
     run: &swarmrt_protocol::services::RunServices,
+    id: u32,
 ) -> anyhow::Result<RobotPorts> {
-    RobotPorts::open(node, run).map_err(|e| anyhow::anyhow!("robot ports: {e}"))
+    RobotPorts::open(node, run, id).map_err(|e| anyhow::anyhow!("robot ports: {e}"))
 }
 
 /// [`RobotPorts::open_listening`] with the benchmarks' error type: the robot sleeps in its own
@@ -204,8 +205,9 @@ pub fn robot_ports(
 pub fn listening_robot_ports(
     node: &iceoryx2::node::Node<Svc>,
     run: &swarmrt_protocol::services::RunServices,
+    id: u32,
 ) -> anyhow::Result<RobotPorts> {
-    RobotPorts::open_listening(node, run).map_err(|e| anyhow::anyhow!("robot ports: {e}"))
+    RobotPorts::open_listening(node, run, id).map_err(|e| anyhow::anyhow!("robot ports: {e}"))
 }
 
 /// CLOCK_MONOTONIC in nanoseconds: the same clock in every process of this machine, so

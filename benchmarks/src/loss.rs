@@ -173,7 +173,7 @@ pub fn subscriber(run: &RunServices, mode: LossMode, work_us: u64) -> anyhow::Re
             }
         }
         LossMode::RuntimeFree | LossMode::RuntimeLockStep => {
-            let s = proto_ipc::create_services(&node, run, 1, 0, 0)
+            let s = proto_ipc::create_services(&node, run, 0..1, 0, 0)
                 .map_err(|e| anyhow::anyhow!("{e}"))?;
             let listener = s
                 .observations_event
@@ -187,7 +187,7 @@ pub fn subscriber(run: &RunServices, mode: LossMode, work_us: u64) -> anyhow::Re
                 wait,
             } = RobotPorts::on(
                 &s.observations,
-                &s.commands,
+                &s.commands[0],
                 &s.commands_event,
                 proto_ipc::TickWait::Listener(Box::new(listener)),
             )
@@ -260,7 +260,7 @@ pub fn publisher(
             iox(notifier.notify(), "notify")?;
         }
         LossMode::RuntimeFree | LossMode::RuntimeLockStep => {
-            let s = proto_ipc::open_services(&node, run).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let s = proto_ipc::open_services(&node, run, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
             // The world's ports as `WorldPorts::open` makes them, on services this side opened.
             let publisher = iox(
                 s.observations

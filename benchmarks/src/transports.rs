@@ -671,8 +671,8 @@ pub fn path_world(run: &RunServices, runtime: bool, secs: f64) -> anyhow::Result
     let deadline = Duration::from_secs_f64(secs.max(0.01));
     let mut rtts = Vec::new();
     if runtime {
-        let s =
-            proto_ipc::create_services(&node, run, 1, 0, 0).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let s = proto_ipc::create_services(&node, run, 0..1, 0, 0)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
         let ports = world_ports(&s, 1)?;
         let WorldPorts {
             publisher,
@@ -779,7 +779,7 @@ pub fn path_world(run: &RunServices, runtime: bool, secs: f64) -> anyhow::Result
 pub fn path_robot(run: &RunServices, runtime: bool) -> anyhow::Result<()> {
     let node = bench_node(run, "bench-path-robot")?;
     if runtime {
-        let ports = robot_ports(&node, run)?;
+        let ports = robot_ports(&node, run, 0)?;
         iox(ports.hello(0), "send")?;
         loop {
             let seen = ports.wait.seen();

@@ -4,8 +4,9 @@
 //! linking iceoryx2.
 //!
 //! Topology (flat in N, see DESIGN section 9): one observation service whose samples hold
-//! every robot's slot, one command service all robots publish on, and an event service beside
-//! each to wake the other side. Both pub/sub services keep iceoryx2's safe overflow on: in
+//! every robot's slot, command services that robots publish on in groups of
+//! [`COMMAND_GROUP`] ids (one group per service keeps the world's drain O(N), see
+//! [`CommandSubscribers`]), and an event service beside each side to wake the other. Both pub/sub services keep iceoryx2's safe overflow on: in
 //! lock-step no queue ever holds more than one sample per publisher, so overflow cannot drop
 //! anything, and a publisher never blocks on a subscriber that was SIGKILLed.
 
@@ -17,7 +18,8 @@ use iceoryx2::prelude::*;
 use iceoryx2_bb_system_types::file_name::FileName;
 use iceoryx2_bb_system_types::path::Path as IoxPath;
 
-use swarmrt_protocol::services::{EVENT_COMMAND, EVENT_CONTROL, RunServices};
+pub use swarmrt_protocol::services::COMMAND_GROUP;
+use swarmrt_protocol::services::{EVENT_COMMAND, EVENT_CONTROL, RunServices, command_group_of};
 use swarmrt_protocol::{Command, Observation, ObservationHeader};
 
 pub mod bell;
@@ -195,8 +197,9 @@ pub struct WorldServices {
     pub observations: ObservationService,
     /// World -> robots wake-up.
     pub observations_event: EventService,
-    /// Robots -> world samples.
-    pub commands: CommandService,
+    /// Robots -> world samples: one service per group of [`COMMAND_GROUP`] robot ids, from
+    /// the group of the first robot id on.
+    pub commands: Vec<CommandService>,
     /// Robots (and the world's control thread) -> world wake-up.
     pub commands_event: EventService,
     /// World -> robots wake-up in one call ([`bell`]): robots of this build sleep on it; the
@@ -204,18 +207,19 @@ pub struct WorldServices {
     pub bell: std::sync::Arc<bell::Bell>,
 }
 
-/// Creates the run's services for `robots` robots. Extra ports leave room for the world's
-/// control thread and for the fresh processes of up to `restarts` restarted robots whose old
-/// ports are not yet reclaimed; `observers` spare subscriber and listener slots (and nodes)
-/// let a tool, recorder or viewer attach read-only mid-run (`ipc.observers`).
+/// Creates the run's services for the robots of ids `robots` (a host's robots start at its
+/// first id). Extra ports leave room for the world's control thread and for the fresh
+/// processes of up to `restarts` restarted robots whose old ports are not yet reclaimed;
+/// `observers` spare subscriber and listener slots (and nodes) let a tool, recorder or
+/// viewer attach read-only mid-run (`ipc.observers`).
 pub fn create_services(
     node: &Node<Svc>,
     run: &RunServices,
-    robots: usize,
+    robots: std::ops::Range<u32>,
     restarts: usize,
     observers: usize,
 ) -> Result<WorldServices, IpcError> {
-    let n = robots + 8 + restarts;
+    let n = robots.len() + 8 + restarts;
     let o = observers;
     let observations = node
         .service_builder(&service_name(&run.observations())?)
@@ -236,17 +240,23 @@ pub fn create_services(
         .max_listeners(n + o)
         .max_nodes(n + 2 + o)
         .create()?;
-    let commands = node
-        .service_builder(&service_name(&run.commands())?)
-        .publish_subscribe::<Command>()
-        .max_publishers(n)
-        .max_subscribers(1 + o)
-        .max_nodes(n + 2 + o)
-        .subscriber_max_buffer_size(2)
-        .subscriber_max_borrowed_samples(1)
-        .history_size(0)
-        .enable_safe_overflow(true)
-        .create()?;
+    let groups = command_groups(&robots);
+    let per_group = (COMMAND_GROUP as usize).min(robots.len()) + 8 + restarts;
+    let commands = groups
+        .map(|g| {
+            Ok(node
+                .service_builder(&service_name(&run.command_group(g))?)
+                .publish_subscribe::<Command>()
+                .max_publishers(per_group)
+                .max_subscribers(1 + o)
+                .max_nodes(per_group + 2 + o)
+                .subscriber_max_buffer_size(2)
+                .subscriber_max_borrowed_samples(1)
+                .history_size(0)
+                .enable_safe_overflow(true)
+                .create()?)
+        })
+        .collect::<Result<Vec<_>, IpcError>>()?;
     let commands_event = node
         .service_builder(&service_name(&run.commands())?)
         .event()
@@ -269,20 +279,32 @@ pub fn create_services(
     })
 }
 
-/// The services as a robot (or the world's control thread) opens them.
+/// The command service groups that hold the robots of ids `robots` (none for no robots).
+pub fn command_groups(robots: &std::ops::Range<u32>) -> std::ops::Range<u32> {
+    if robots.is_empty() {
+        return 0..0;
+    }
+    command_group_of(robots.start)..command_group_of(robots.end - 1) + 1
+}
+
+/// The services as a robot opens them.
 pub struct RobotServices {
     /// World -> robots samples.
     pub observations: ObservationService,
     /// World -> robots wake-up.
     pub observations_event: EventService,
-    /// Robots -> world samples.
+    /// This robot's command group.
     pub commands: CommandService,
     /// Robots -> world wake-up.
     pub commands_event: EventService,
 }
 
-/// Opens the services the world created.
-pub fn open_services(node: &Node<Svc>, run: &RunServices) -> Result<RobotServices, IpcError> {
+/// Opens the services the world created, as robot `id` uses them.
+pub fn open_services(
+    node: &Node<Svc>,
+    run: &RunServices,
+    id: u32,
+) -> Result<RobotServices, IpcError> {
     Ok(RobotServices {
         observations: node
             .service_builder(&service_name(&run.observations())?)
@@ -294,7 +316,7 @@ pub fn open_services(node: &Node<Svc>, run: &RunServices) -> Result<RobotService
             .event()
             .open()?,
         commands: node
-            .service_builder(&service_name(&run.commands())?)
+            .service_builder(&service_name(&run.robot_commands(id))?)
             .publish_subscribe::<Command>()
             .open()?,
         commands_event: node
@@ -320,7 +342,7 @@ pub struct WorldPorts {
     /// Wakes the robots after a publish.
     pub notifier: Notifier<Svc>,
     /// Commands from every robot.
-    pub commands: Subscriber<Svc, Command, ()>,
+    pub commands: CommandSubscribers,
     /// Woken by the robots (and the world's control thread).
     pub listener: Listener<Svc>,
     /// Wakes every robot of this build at once.
@@ -351,7 +373,7 @@ impl WorldPorts {
                 .override_sample_preallocation(move |_| OBSERVATION_SAMPLES + 2 * observers)
                 .create()?,
             notifier: observations_event.notifier_builder().create()?,
-            commands: commands.subscriber_builder().create()?,
+            commands: CommandSubscribers::open(commands)?,
             listener: commands_event.listener_builder().create()?,
         })
     }
@@ -363,6 +385,43 @@ impl WorldPorts {
         self.bell.ring()?;
         self.notifier.notify()?;
         Ok(())
+    }
+}
+
+/// The world's subscribers of the command groups, drained one group after the other.
+pub struct CommandSubscribers {
+    groups: Vec<Subscriber<Svc, Command, ()>>,
+    /// The group [`CommandSubscribers::receive`] looks in first.
+    next: std::cell::Cell<usize>,
+}
+
+/// A command as received from a group.
+pub type CommandSample = iceoryx2::sample::Sample<Svc, Command, ()>;
+
+impl CommandSubscribers {
+    /// One subscriber per group service.
+    pub fn open(groups: &[CommandService]) -> Result<CommandSubscribers, IpcError> {
+        Ok(CommandSubscribers {
+            groups: groups
+                .iter()
+                .map(|g| g.subscriber_builder().create())
+                .collect::<Result<_, _>>()?,
+            next: std::cell::Cell::new(0),
+        })
+    }
+
+    /// The next command of any group; `None` once every group was found empty in turn, so
+    /// `while let Some(c) = commands.receive()?` drains them all. A group is left only when
+    /// it is empty: iceoryx2 walks a group's publishers per sample, so this is O(group) each.
+    pub fn receive(&self) -> Result<Option<CommandSample>, IpcError> {
+        while let Some(group) = self.groups.get(self.next.get()) {
+            if let Some(sample) = group.receive()? {
+                return Ok(Some(sample));
+            }
+            self.next.set(self.next.get() + 1);
+        }
+        self.next.set(0);
+        Ok(None)
     }
 }
 
@@ -412,10 +471,10 @@ pub struct RobotPorts {
 }
 
 impl RobotPorts {
-    /// Opens the run's services from `node` and creates a robot's ports on them; the robot
-    /// sleeps on the run's bell.
-    pub fn open(node: &Node<Svc>, run: &RunServices) -> Result<RobotPorts, IpcError> {
-        let s = open_services(node, run)?;
+    /// Opens the run's services from `node` and creates robot `id`'s ports on them; the
+    /// robot sleeps on the run's bell.
+    pub fn open(node: &Node<Svc>, run: &RunServices, id: u32) -> Result<RobotPorts, IpcError> {
+        let s = open_services(node, run, id)?;
         let bell = bell::Bell::open(run).map_err(|e| {
             format!(
                 "cannot open the tick bell {}: {e}",
@@ -432,8 +491,12 @@ impl RobotPorts {
 
     /// As [`RobotPorts::open`], but the robot sleeps in its own listener of the observation
     /// event: one notification per robot per tick, as before the bell (the benchmarks' floor).
-    pub fn open_listening(node: &Node<Svc>, run: &RunServices) -> Result<RobotPorts, IpcError> {
-        let s = open_services(node, run)?;
+    pub fn open_listening(
+        node: &Node<Svc>,
+        run: &RunServices,
+        id: u32,
+    ) -> Result<RobotPorts, IpcError> {
+        let s = open_services(node, run, id)?;
         let listener = s.observations_event.listener_builder().create()?;
         RobotPorts::on(
             &s.observations,

@@ -45,6 +45,15 @@ pub const SHM_DIR: &str = "/dev/shm";
 pub const EVENT_COMMAND: usize = 1;
 /// Event id the world's control thread uses to wake the world's main loop.
 pub const EVENT_CONTROL: usize = 2;
+/// Robot ids per command service. iceoryx2 walks every publisher of a service for each
+/// sample it hands out, so draining N robots' answers from one service costs the world
+/// O(N^2) a tick (a third of its CPU at 1,000 robots); groups of 32 make it O(32 N).
+pub const COMMAND_GROUP: u32 = 32;
+
+/// The command service group robot `id` publishes in.
+pub fn command_group_of(id: u32) -> u32 {
+    id / COMMAND_GROUP
+}
 
 /// What a robot program finds in its environment, beside the arguments `swarm-agent` gets
 /// (`--run-id --robot --incarnation --config --storage [--slot-offset]`), so a controller in
@@ -71,8 +80,10 @@ pub mod env {
     pub const IPC_CONFIG: &str = "SWARMRT_IPC_CONFIG";
     /// Name of the observation service (and of the event service beside it).
     pub const OBSERVATIONS: &str = "SWARMRT_OBSERVATIONS";
-    /// Name of the command service (and of the event service beside it).
+    /// Name of this robot's command service (its group's: robot ids `32 k .. 32 k + 31`).
     pub const COMMANDS: &str = "SWARMRT_COMMANDS";
+    /// Name of the event service a robot wakes the world on (one for the whole run).
+    pub const COMMANDS_EVENT: &str = "SWARMRT_COMMANDS_EVENT";
     /// The node name this robot should use (so `iox2 node list` shows who is who).
     pub const NODE_NAME: &str = "SWARMRT_NODE_NAME";
 }
@@ -101,9 +112,21 @@ impl RunServices {
         format!("swarmrt/{}/observations", self.run_id)
     }
 
-    /// Agents -> world: one command sample per robot per tick.
+    /// Agents -> world wake-up: the event service every robot notifies (and the world's
+    /// control thread). The commands themselves travel in [`RunServices::command_group`].
     pub fn commands(&self) -> String {
         format!("swarmrt/{}/commands", self.run_id)
+    }
+
+    /// Agents -> world: one command sample per robot per tick, robots of ids
+    /// `COMMAND_GROUP * group ..` publishing in the same service.
+    pub fn command_group(&self, group: u32) -> String {
+        format!("swarmrt/{}/commands/{group}", self.run_id)
+    }
+
+    /// The command service robot `id` publishes in.
+    pub fn robot_commands(&self, id: u32) -> String {
+        self.command_group(command_group_of(id))
     }
 
     /// World -> woken robots: one sample per propagation round (`radio.rounds`).
@@ -154,7 +177,8 @@ impl RunServices {
             (env::IPC_PREFIX, self.shm_prefix().into()),
             (env::IPC_CONFIG, ipc_config.as_os_str().to_owned()),
             (env::OBSERVATIONS, self.observations().into()),
-            (env::COMMANDS, self.commands().into()),
+            (env::COMMANDS, self.robot_commands(id).into()),
+            (env::COMMANDS_EVENT, self.commands().into()),
             (env::NODE_NAME, self.robot_node_name(id).into()),
         ]
     }
@@ -194,6 +218,9 @@ mod tests {
         let b = RunServices::new("00ac");
         assert_ne!(a.observations(), b.observations());
         assert!(a.commands().starts_with("swarmrt/00ab/"));
+        assert_eq!(a.robot_commands(31), a.command_group(0));
+        assert_eq!(a.robot_commands(32), "swarmrt/00ab/commands/1");
+        assert_ne!(a.command_group(0), a.commands());
         assert!(a.ipc_root().ends_with("00ab"));
         assert!(valid_run_id("00ab"));
         assert!(!valid_run_id("../x"));

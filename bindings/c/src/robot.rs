@@ -163,7 +163,7 @@ impl Robot {
         }
         let run = RunServices::new(&env.run_id);
         let node = ipc::node(&run, &env.node_name)?;
-        let ports = RobotPorts::open(&node, &run)?;
+        let ports = RobotPorts::open(&node, &run, env.robot)?;
         ports.hello(env.robot)?;
         Ok(Robot {
             ports,

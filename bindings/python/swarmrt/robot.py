@@ -165,6 +165,11 @@ class Robot:
         _note_termination_signals()
         obs_name = iox2.ServiceName.new(_env("SWARMRT_OBSERVATIONS"))
         cmd_name = iox2.ServiceName.new(_env("SWARMRT_COMMANDS"))
+        # Commands travel in the robot's group service; the world is woken on one event
+        # service for the whole run (a world older than the groups used one name for both).
+        event_name = iox2.ServiceName.new(
+            os.environ.get("SWARMRT_COMMANDS_EVENT") or _env("SWARMRT_COMMANDS")
+        )
         observations = (
             node.service_builder(obs_name)
             .publish_subscribe(iox2.Slice[Observation])
@@ -173,7 +178,7 @@ class Robot:
         )
         observations_event = node.service_builder(obs_name).event().open()
         commands = node.service_builder(cmd_name).publish_subscribe(Command).open()
-        commands_event = node.service_builder(cmd_name).event().open()
+        commands_event = node.service_builder(event_name).event().open()
         # The bell, else (a world without one) a listener of the observation event: a
         # listener costs the world one notification per tick, the bell nothing.
         try:

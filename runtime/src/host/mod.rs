@@ -183,7 +183,13 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
     let _ = ipc::raise_fd_limit();
     let node = ipc::node(&run, &format!("swarmrt-{}-host", args.run_id))?;
     let observers = cfg.ipc.observers as usize;
-    let services = ipc::create_services(&node, &run, count, cfg.faults.restart.len(), observers)?;
+    let services = ipc::create_services(
+        &node,
+        &run,
+        first..first + count as u32,
+        cfg.faults.restart.len(),
+        observers,
+    )?;
     let ports = ipc::WorldPorts::open(&services, count, observers)?;
     let (raw_tx, raw_rx) = crossbeam_channel::unbounded::<Msg>();
     let rx = ipc::wake_relay(&run, format!("swarmrt-{}-host-relay", args.run_id), raw_rx)?;

@@ -53,7 +53,7 @@ pub fn run(
         _ => (None, None),
     };
     let node = ipc::node(run, &run.robot_node_name(id))?;
-    let ports = ipc::RobotPorts::open(&node, run)?;
+    let ports = ipc::RobotPorts::open(&node, run, id)?;
     // With propagation rounds the robot sleeps in its own wake-up listener, which the world
     // notifies for every tick and for the rounds that have frames for it.
     let rounds = if cfg.radio.rounds > 0 {

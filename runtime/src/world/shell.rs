@@ -11,7 +11,6 @@ use std::time::{Duration, Instant};
 use crossbeam_channel::{Receiver, TryRecvError};
 use iceoryx2::identifiers::UniquePublisherId;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
-use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use swarmrt_hosts::HostsFile;
 use swarmrt_hosts::wire::{Down, Up, encode_tick};
@@ -26,7 +25,7 @@ use swarmrt_protocol::{
 use crate::supervisor::hello::{Bindings, Sample};
 use swarmrt_scenario::Config;
 
-use super::timing::{TickPhases, TickTimer, TickTiming};
+use super::timing::{TickPhases, TickTimer, TickTiming, thread_cpu_ns};
 use swarmrt_world::records::RecordWriter;
 use swarmrt_world::{ProcessSignal, World};
 
@@ -405,7 +404,8 @@ pub fn run(
     warn_on_fd_limit(n);
     let node = ipc::node(run, &run.world_node_name())?;
     let observers = cfg.ipc.observers as usize;
-    let services = ipc::create_services(&node, run, n, cfg.faults.restart.len(), observers)?;
+    let services =
+        ipc::create_services(&node, run, 0..n as u32, cfg.faults.restart.len(), observers)?;
     let ports = ipc::WorldPorts::open(&services, n, observers)?;
     if cfg.radio.rounds > 0 && (hosts.is_some() || mode == Mode::Realtime) {
         return Err(
@@ -639,7 +639,9 @@ impl Shell<'_> {
             let t0 = Instant::now();
             self.world.observe(&mut obs);
             let t1 = Instant::now();
+            let cpu1 = thread_cpu_ns();
             self.publish(tick, &obs)?;
+            let publish_cpu = thread_cpu_ns().saturating_sub(cpu1);
             let t2 = Instant::now();
             if realtime {
                 self.collect_realtime(&mut standing, tick_ends, &mut rt_stats)?;
@@ -673,6 +675,7 @@ impl Shell<'_> {
                 wait: ns(t2, t3),
                 step: ns(t3, t4),
                 record: ns(t4, t5),
+                publish_cpu,
                 stages: self.world.take_stage_times(),
             });
             if self.world.tick() <= EARLY_REPORTS || last_progress.elapsed() >= PROGRESS_EVERY {
@@ -923,7 +926,7 @@ impl Shell<'_> {
 /// Receives every queued command sample from the robots of this host, bound by their hello
 /// ([`take`] says what each is).
 fn receive(
-    subscriber: &Subscriber<ipc::Svc, Command, ()>,
+    subscriber: &ipc::CommandSubscribers,
     remote_robot: &[bool],
     hellos: &mut Hellos,
     pending: &mut BTreeSet<u32>,
@@ -946,7 +949,7 @@ fn receive(
 /// robot that has sent nothing for `unresponsive`. Returns true when the run must stop.
 #[allow(clippy::too_many_arguments)]
 fn collect_until(
-    subscriber: &Subscriber<ipc::Svc, Command, ()>,
+    subscriber: &ipc::CommandSubscribers,
     listener: &Listener<ipc::Svc>,
     node: &Node<ipc::Svc>,
     control: &Receiver<Control>,

@@ -26,6 +26,9 @@ pub struct TickPhases {
     pub step: u64,
     /// Writing the tick's records.
     pub record: u64,
+    /// CPU time of the world's thread within `publish` ([`thread_cpu_ns`]): the rest of
+    /// `publish` is the world waiting for its core behind the robots it has just woken.
+    pub publish_cpu: u64,
     /// The world's stages within `observe` and `step` (not added to the total again).
     pub stages: StageTimes,
 }
@@ -37,12 +40,24 @@ impl TickPhases {
     }
 }
 
+/// CPU time the calling thread has used, ns (`CLOCK_THREAD_CPUTIME_ID`).
+pub fn thread_cpu_ns() -> u64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime only writes the struct we pass.
+    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
 /// Accumulates [`TickPhases`].
 #[derive(Debug, Clone)]
 pub struct TickTimer {
     hist: Vec<u64>,
     ticks: u64,
     sums: [u128; 5],
+    publish_cpu_sum: u128,
     stage_sums: [u128; Stage::ALL.len()],
     max: u64,
 }
@@ -53,6 +68,7 @@ impl Default for TickTimer {
             hist: vec![0; BUCKETS],
             ticks: 0,
             sums: [0; 5],
+            publish_cpu_sum: 0,
             stage_sums: [0; Stage::ALL.len()],
             max: 0,
         }
@@ -88,6 +104,9 @@ pub struct TickTiming {
     pub observe_ms_mean: f64,
     /// Mean ms per tick publishing the observations.
     pub publish_ms_mean: f64,
+    /// Mean ms per tick of the world's own CPU in publishing (part of `publish_ms_mean`).
+    #[serde(default)]
+    pub publish_cpu_ms_mean: f64,
     /// Mean ms per tick waiting for the robots' commands.
     pub wait_ms_mean: f64,
     /// Mean ms per tick in `World::step`.
@@ -125,6 +144,7 @@ impl TickTimer {
         {
             *s += v as u128;
         }
+        self.publish_cpu_sum += p.publish_cpu as u128;
         for (s, stage) in self.stage_sums.iter_mut().zip(Stage::ALL) {
             *s += p.stages.get(stage).as_nanos();
         }
@@ -160,6 +180,7 @@ impl TickTimer {
             tick_ms_max: self.max as f64 / 1e6,
             observe_ms_mean: mean_ms(0),
             publish_ms_mean: mean_ms(1),
+            publish_cpu_ms_mean: self.publish_cpu_sum as f64 / n / 1e6,
             wait_ms_mean: mean_ms(2),
             step_ms_mean: mean_ms(3),
             record_ms_mean: mean_ms(4),
@@ -195,6 +216,15 @@ mod tests {
         assert!((s.seconds - 500.5).abs() < 1e-6);
         assert_eq!(TickTimer::default().summary().tick_ms_median, 0.0);
         assert_eq!(s.stage_radio_ms_mean, 0.0, "no stage was timed");
+        t.add(TickPhases {
+            publish: 3_000_000,
+            publish_cpu: 1_001_000,
+            ..TickPhases::default()
+        });
+        let s = t.summary();
+        assert!((s.publish_cpu_ms_mean - 0.001).abs() < 1e-12, "{s:?}");
+        // The CPU is part of publish, not added to the tick again.
+        assert!((s.seconds - 500.503).abs() < 1e-9, "{s:?}");
     }
 
     #[test]
