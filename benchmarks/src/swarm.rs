@@ -25,7 +25,9 @@ use swarmrt_world::Stage;
 
 use super::child::{ChildMsg, ChildSpec};
 use super::floor::{FloorResult, SAMPLE_TICK};
-use super::peers::{self, Cpu, Fault, Peer, live_cpu_secs, reaped_children_cpu_secs};
+use super::peers::{
+    self, Cpu, Fault, Peer, TURN_WINDOW, live_cpu_secs, reaped_children_cpu_secs, robot_turn_us,
+};
 use super::procs::{Children, Memory, Messages, memory, my_children, open_fds};
 use super::stats::median;
 use super::{
@@ -169,6 +171,10 @@ pub struct TransportSummary {
     pub cpu_ms_per_tick: f64,
     /// CPU of all processes per tick from the memory reading on, ms.
     pub ticking_cpu_ms_per_tick: f64,
+    /// A robot's turn: CPU per tick of one robot process while ticking, µs (runtime and
+    /// iceoryx2 floor; NaN for the peers, which do not measure it).
+    #[serde(default)]
+    pub robot_turn_us: f64,
     /// PSS of all processes, KiB.
     pub pss_kib: f64,
     /// Start-up until every robot said hello, ms.
@@ -470,12 +476,20 @@ fn runtime_run(
         // memory reading stays where it was and the CPU reading has a known tick.
         let mut sample: Option<(Memory, Option<usize>)> = None;
         let mut cpu_read: Option<(u64, (f64, usize))> = None;
+        let mut turn = None;
         let cpu_before = reaped_children_cpu_secs();
         let outcome = processes::run(cfg, &config_path, dir, interrupt.receiver(), |tick| {
             if sample.is_none() && (tick >= SAMPLE_TICK || tick == cfg.scenario.ticks) {
                 sample = Some(sample_children());
             } else if sample.is_some() && cpu_read.is_none() {
                 cpu_read = Some((tick, children_cpu()));
+                // Then a robot's turn, while the world ticks on.
+                let robots: Vec<u32> = my_children()
+                    .into_iter()
+                    .filter(|(_, cmd)| cmd.contains("swarm-agent"))
+                    .map(|(p, _)| p)
+                    .collect();
+                turn = robot_turn_us(&robots, TURN_WINDOW);
             }
         })?;
         let cpu_after = reaped_children_cpu_secs();
@@ -509,13 +523,17 @@ fn runtime_run(
         let t = &metrics["shell"]["timing"];
         let num = |k: &str| t[k].as_f64().unwrap_or(f64::NAN);
         row.ticks = t["ticks"].as_u64().unwrap_or(0);
-        row.cpu = Some(Cpu::new(cpu_before, cpu_after, cpu_mid, row.ticks));
+        row.cpu = Some(Cpu {
+            robot_turn_us: turn,
+            ..Cpu::new(cpu_before, cpu_after, cpu_mid, row.ticks)
+        });
         row.ticks_per_s = row.ticks as f64 / num("seconds");
         row.tick_ms_median = num("tick_ms_median");
         row.tick_ms_p99 = num("tick_ms_p99");
         row.phases_ms = serde_json::json!({
             "observe": num("observe_ms_mean"),
             "publish": num("publish_ms_mean"),
+            "publish_cpu": num("publish_cpu_ms_mean"),
             "wait": num("wait_ms_mean"),
             "step": num("step_ms_mean"),
             "record": num("record_ms_mean"),
@@ -572,10 +590,13 @@ fn floor_run(n: u32, ticks: u64, interrupt: &Interrupt, run_ids: &mut Vec<String
         let startup = PEER_TIMEOUT + Duration::from_millis(100) * n;
         let mut msg = world.next(startup, interrupt)?;
         let mut cpu_mid = None;
+        let mut turn = None;
         if msg == ChildMsg::Progress {
             cpu_mid = Some((SAMPLE_TICK.min(ticks), live_cpu_secs(&kids.pids())));
             row.memory = Some(memory(&kids.pids()));
             world.go()?;
+            // The floor robots' turn while their world ticks on (the world was spawned first).
+            turn = robot_turn_us(&kids.pids()[1..], TURN_WINDOW);
             msg = world.next(PEER_TIMEOUT + Duration::from_secs(ticks), interrupt)?;
         }
         let ChildMsg::Result { value } = msg else {
@@ -584,12 +605,10 @@ fn floor_run(n: u32, ticks: u64, interrupt: &Interrupt, run_ids: &mut Vec<String
         let res: FloorResult = serde_json::from_value(value)?;
         row.ticks_per_s = res.ticks as f64 / res.secs;
         kids.finish(PEER_TIMEOUT)?;
-        row.cpu = Some(Cpu::new(
-            cpu_before,
-            reaped_children_cpu_secs(),
-            cpu_mid,
-            res.ticks,
-        ));
+        row.cpu = Some(Cpu {
+            robot_turn_us: turn,
+            ..Cpu::new(cpu_before, reaped_children_cpu_secs(), cpu_mid, res.ticks)
+        });
         row.result = Some(res);
         Ok(())
     })();
@@ -865,18 +884,19 @@ pub fn table(r: &SwarmReport) -> String {
     let _ = writeln!(s, "\nwhere a runtime tick goes (mean ms per tick)");
     let _ = writeln!(
         s,
-        "{:>5} {:>9} {:>9} {:>9} {:>9} {:>9}",
-        "N", "observe", "publish", "wait", "step", "record"
+        "{:>5} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "N", "observe", "publish", "pub CPU", "wait", "step", "record"
     );
     for rt in r.runtime.iter().filter(|x| x.error.is_none()) {
         let p = &rt.phases_ms;
         let f = |k: &str| ms(p[k].as_f64().unwrap_or(f64::NAN));
         let _ = writeln!(
             s,
-            "{:>5} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            "{:>5} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
             rt.agents,
             f("observe"),
             f("publish"),
+            f("publish_cpu"),
             f("wait"),
             f("step"),
             f("record")
@@ -938,7 +958,7 @@ fn transport_tables(s: &mut String, r: &SwarmReport) {
          over its ticks, start-up included; tick CPU: from about tick {SAMPLE_TICK} to the end)"
     );
     let head = format!(
-        "{:>5} {:>5} {:<12} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "{:>5} {:>5} {:<12} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>9}",
         "N",
         "round",
         "transport",
@@ -948,6 +968,7 @@ fn transport_tables(s: &mut String, r: &SwarmReport) {
         "startup",
         "CPU/tick",
         "tick CPU",
+        "turn",
         "PSS"
     );
     let _ = writeln!(s, "{head}");
@@ -963,7 +984,7 @@ fn transport_tables(s: &mut String, r: &SwarmReport) {
         }
         let _ = writeln!(
             s,
-            "{:>5} {:>5} {:<12} {:>8.1} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            "{:>5} {:>5} {:<12} {:>8.1} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>9}",
             l.agents,
             l.round,
             l.label,
@@ -973,6 +994,7 @@ fn transport_tables(s: &mut String, r: &SwarmReport) {
             cpu(l.startup_ms),
             cpu(l.cpu.map(|c| c.ms_per_tick)),
             cpu(l.cpu.and_then(|c| c.ticking_ms_per_tick)),
+            us(l.cpu.and_then(|c| c.robot_turn_us).unwrap_or(f64::NAN)),
             l.memory
                 .map(|m| fmt_bytes(m.pss_kib as f64 * 1024.0))
                 .unwrap_or_else(|| "-".into())
@@ -984,7 +1006,7 @@ fn transport_tables(s: &mut String, r: &SwarmReport) {
     let _ = writeln!(s, "\nper N and transport, median over rounds");
     let _ = writeln!(
         s,
-        "{:>5} {:>5} {:<12} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "{:>5} {:>5} {:<12} {:>8} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>9}",
         "N",
         "ok",
         "transport",
@@ -994,6 +1016,7 @@ fn transport_tables(s: &mut String, r: &SwarmReport) {
         "startup",
         "CPU/tick",
         "tick CPU",
+        "turn",
         "PSS"
     );
     for t in &r.transports {
@@ -1013,7 +1036,7 @@ fn transport_tables(s: &mut String, r: &SwarmReport) {
         }
         let _ = writeln!(
             s,
-            "{:>5} {ok:>5} {label:<12} {:>8.1} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            "{:>5} {ok:>5} {label:<12} {:>8.1} {:>9} {:>9} {:>9} {:>9} {:>9} {:>8} {:>9}",
             t.agents,
             t.ticks_per_s,
             ms(t.tick_ms_median),
@@ -1021,8 +1044,38 @@ fn transport_tables(s: &mut String, r: &SwarmReport) {
             ms(t.startup_ms),
             ms(t.cpu_ms_per_tick),
             ms(t.ticking_cpu_ms_per_tick),
+            us(t.robot_turn_us),
             fmt_bytes(t.pss_kib * 1024.0)
         );
+    }
+    let turns: Vec<String> = r
+        .transports
+        .iter()
+        .filter(|t| t.transport == TRANSPORTS[0].0)
+        .filter_map(|rt| {
+            let floor = r
+                .transports
+                .iter()
+                .find(|f| f.agents == rt.agents && f.transport == TRANSPORTS[1].0)?;
+            let x = rt.robot_turn_us / floor.robot_turn_us;
+            x.is_finite().then(|| format!("{:.2}x at {}", x, rt.agents))
+        })
+        .collect();
+    if !turns.is_empty() {
+        let _ = writeln!(
+            s,
+            "a robot's turn (CPU per tick of one robot process), runtime / iceoryx2 floor: {}",
+            turns.join(", ")
+        );
+    }
+}
+
+/// Microseconds, or "-".
+fn us(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.1} us")
+    } else {
+        "-".into()
     }
 }
 
@@ -1224,6 +1277,7 @@ fn summarize_transports(r: &SwarmReport) -> Vec<TransportSummary> {
                 tick_ms_p99: med(&|l| Some(l.p99_ms)),
                 cpu_ms_per_tick: med(&|l| l.cpu.map(|c| c.ms_per_tick)),
                 ticking_cpu_ms_per_tick: med(&|l| l.cpu.and_then(|c| c.ticking_ms_per_tick)),
+                robot_turn_us: med(&|l| l.cpu.and_then(|c| c.robot_turn_us)),
                 pss_kib: med(&|l| l.memory.map(|m| m.pss_kib as f64)),
                 startup_ms: med(&|l| l.startup_ms),
                 error: of.iter().find_map(|l| l.error.clone()),

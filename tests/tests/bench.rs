@@ -170,8 +170,9 @@ fn bench_swarm_reports_runtime_floor_and_in_process_and_cleans_up() {
             "swarm",
             "--agents",
             "3",
+            // Long enough (~0.2 s) for the robots' turn to be watched while they tick.
             "--ticks",
-            "50",
+            "1000",
             "--in-process-agents",
             "20",
             "--json",
@@ -184,17 +185,19 @@ fn bench_swarm_reports_runtime_floor_and_in_process_and_cleans_up() {
     let rt = &v["runtime"][0];
     assert!(rt["error"].is_null(), "{rt}");
     assert_eq!(rt["agents"], 3);
-    assert_eq!(rt["ticks"], 50);
+    assert_eq!(rt["ticks"], 1000);
     positive(&rt["ticks_per_s"], "runtime ticks/s");
     positive(&rt["tick_ms_median"], "runtime median");
     positive(&rt["startup_ms"], "runtime startup");
     positive(&rt["memory"]["pss_kib"], "runtime PSS");
     assert_eq!(rt["memory"]["processes"], 4, "world + 3 robots: {rt}");
     positive(&rt["world_fds"], "world fds");
+    positive(&rt["cpu"]["robot_turn_us"], "a runtime robot's turn");
 
     let fl = &v["floor"][0];
     assert!(fl["error"].is_null(), "{fl}");
-    assert_eq!(fl["result"]["ticks"], 50);
+    assert_eq!(fl["result"]["ticks"], 1000);
+    positive(&fl["cpu"]["robot_turn_us"], "a floor robot's turn");
     positive(&fl["result"]["tick_ns"]["median"], "floor median");
     positive(&fl["memory"]["pss_kib"], "floor PSS");
     positive(&v["comparison"][0]["median_ratio"], "runtime / floor");

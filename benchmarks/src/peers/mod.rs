@@ -418,6 +418,49 @@ pub fn live_cpu_secs(pids: &[u32]) -> f64 {
     total
 }
 
+/// How long [`robot_turn_us`] watches the robots.
+pub const TURN_WINDOW: std::time::Duration = std::time::Duration::from_millis(100);
+
+/// Run time (ns, every thread) and voluntary sleeps of live process `pid` so far, from
+/// `/proc/<pid>/task/*/schedstat` and `status`: the scheduler's own counters, the ones
+/// `perf stat`'s task-clock reads.
+fn turns_so_far(pid: u32) -> Option<(u64, u64)> {
+    let (mut ns, mut sleeps) = (0u64, 0u64);
+    for t in std::fs::read_dir(format!("/proc/{pid}/task"))
+        .ok()?
+        .flatten()
+    {
+        let run = std::fs::read_to_string(t.path().join("schedstat")).ok()?;
+        ns += run.split_whitespace().next()?.parse::<u64>().ok()?;
+        let status = std::fs::read_to_string(t.path().join("status")).ok()?;
+        sleeps += status
+            .lines()
+            .find_map(|l| l.strip_prefix("voluntary_ctxt_switches:"))?
+            .trim()
+            .parse::<u64>()
+            .ok()?;
+    }
+    Some((ns, sleeps))
+}
+
+/// A robot's turn, µs: the CPU the robot processes `pids` use per sleep over `window` of
+/// ticking. A lock-step robot sleeps once per tick (it answers, then waits for the next), so
+/// this is its CPU per tick. `None` when no robot slept in the window or one was gone.
+pub fn robot_turn_us(pids: &[u32], window: std::time::Duration) -> Option<f64> {
+    let before: Vec<(u64, u64)> = pids
+        .iter()
+        .map(|&p| turns_so_far(p))
+        .collect::<Option<_>>()?;
+    std::thread::sleep(window);
+    let (mut ns, mut sleeps) = (0u64, 0u64);
+    for (&p, (ns0, s0)) in pids.iter().zip(before) {
+        let (ns1, s1) = turns_so_far(p)?;
+        ns += ns1.saturating_sub(ns0);
+        sleeps += s1.saturating_sub(s0);
+    }
+    (sleeps > 0).then(|| ns as f64 / sleeps as f64 / 1e3)
+}
+
 /// CPU of one run's processes.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Cpu {
@@ -432,6 +475,9 @@ pub struct Cpu {
     pub ticking_ms_per_tick: Option<f64>,
     /// The tick at which the CPU of the live processes was read.
     pub from_tick: Option<u64>,
+    /// A robot's turn while ticking, µs of CPU per robot per tick ([`robot_turn_us`]).
+    #[serde(default)]
+    pub robot_turn_us: Option<f64>,
 }
 
 impl Cpu {
@@ -447,6 +493,7 @@ impl Cpu {
             ms_per_tick: total * 1e3 / ticks.max(1) as f64,
             ticking_ms_per_tick: ticking,
             from_tick: mid.map(|(t, _)| t),
+            robot_turn_us: None,
         }
     }
 }
@@ -478,6 +525,28 @@ mod tests {
         assert_eq!(answer(&slot, 7, None, &mut cmd).unwrap(), None);
         assert!(read_obs(&slot[1..]).is_err());
         assert_eq!(read_command(&cmd[1..]), None);
+    }
+
+    #[test]
+    fn a_robot_turn_is_the_cpu_per_sleep() {
+        // 2 ms of CPU (by its own CPU clock, whatever else runs), then a sleep, in a loop.
+        let script = "import time\nwhile True:\n    t = time.thread_time()\n    \
+                      while time.thread_time() - t < 0.002: pass\n    time.sleep(0.002)\n";
+        let mut child = std::process::Command::new("python3")
+            .args(["-c", script])
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        let turn = robot_turn_us(&[child.id()], std::time::Duration::from_millis(500));
+        child.kill().unwrap();
+        child.wait().unwrap();
+        let turn = turn.expect("the child slept in the window");
+        assert!((1_900.0..4_000.0).contains(&turn), "{turn} us per sleep");
+        assert_eq!(
+            robot_turn_us(&[child.id()], TURN_WINDOW),
+            None,
+            "a gone process"
+        );
     }
 
     #[test]
