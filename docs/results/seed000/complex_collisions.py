@@ -241,8 +241,8 @@ def analyse(cfg, out, speed, seed):
             return None
         return role, before[i] + {1: 0.0, 2: side_off, 3: -side_off}[role]
 
-    def verdict(t):
-        seen = set()
+    def cone_rays(t):
+        """Every lidar ray inside an observer's cone at tick t: (role, origin, angle)."""
         for i in range(n):
             c = cone_of(i, t)
             if c is None:
@@ -250,11 +250,14 @@ def analyse(cfg, out, speed, seed):
             x, y, th, _ = traj[t][i]
             for a in rays:
                 ang = th + a
-                if abs(wrap(ang - c[1])) > cone:
-                    continue
-                if m.ray((x, y), ang, detect) < detect:
-                    seen.add(c[0])
-                    break
+                if abs(wrap(ang - c[1])) <= cone:
+                    yield c[0], (x, y), ang
+
+    def verdict(t):
+        seen = set()
+        for role, origin, ang in cone_rays(t):
+            if role not in seen and m.ray(origin, ang, detect) < detect:
+                seen.add(role)
         return seen
 
     def leader(t):
@@ -311,18 +314,10 @@ def analyse(cfg, out, speed, seed):
         def visible(u):
             """The role and distance at which an observer's cone saw the obstacle hit."""
             best = None
-            for k in range(n):
-                c = cone_of(k, u)
-                if c is None:
-                    continue
-                ox2, oy2, th2, _ = traj[u][k]
-                for a in rays:
-                    ang = th2 + a
-                    if abs(wrap(ang - c[1])) > cone:
-                        continue
-                    dist2, what = m.ray_hit((ox2, oy2), ang, detect)
-                    if what == name and dist2 < detect and (best is None or dist2 < best[1]):
-                        best = ({1: "M", 2: "L", 3: "R"}[c[0]], dist2)
+            for role, origin, ang in cone_rays(u):
+                dist2, what = m.ray_hit(origin, ang, detect)
+                if what == name and dist2 < detect and (best is None or dist2 < best[1]):
+                    best = ({1: "M", 2: "L", 3: "R"}[role], dist2)
             return best
         seen_txt = "-"
         if not hit.startswith("robot"):
