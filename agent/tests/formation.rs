@@ -129,11 +129,7 @@ fn eq_4_5_rotate_into_the_leader_frame() {
 #[test]
 fn the_turn_table_of_section_5_2() {
     let half = 0.05;
-    let s = |left, middle, right| Seen {
-        left,
-        middle,
-        right,
-    };
+    let s = Seen::flags;
     let heads = || panic!("no coin needed here");
     // (seen, previous, target error, expected)
     let table: &[(Seen, Dir, f64, Dir)] = &[
@@ -153,10 +149,24 @@ fn the_turn_table_of_section_5_2() {
         // ... after going straight, toward the target.
         (s(false, true, false), Dir::Straight, 1.0, Dir::Left),
         (s(true, true, true), Dir::Straight, -1.0, Dir::Right),
-        // Left and right only (a gap ahead; the paper is silent): straight through.
-        (s(true, false, true), Dir::Left, 1.0, Dir::Straight),
     ];
-    for &(seen, previous, err, want) in table {
+    // Left and right only (a gap ahead; the paper is silent, the reading is ours): away from
+    // the nearer side whatever the previous turn or the target says; equal ranges (to the
+    // radio's decimetre) go straight through.
+    let gap = |left_range, right_range| Seen {
+        left_range,
+        right_range,
+        ..s(true, false, true)
+    };
+    let gap_table: &[(Seen, Dir, f64, Dir)] = &[
+        (gap(1.2, 2.5), Dir::Left, 1.0, Dir::Right),
+        (gap(1.2, 2.5), Dir::Straight, 0.0, Dir::Right),
+        (gap(2.9, 1.3), Dir::Right, -1.0, Dir::Left),
+        (gap(2.9, 2.8), Dir::Straight, -1.0, Dir::Left),
+        (gap(2.0, 2.0), Dir::Left, 1.0, Dir::Straight),
+        (gap(2.0, 2.0), Dir::Right, -1.0, Dir::Straight),
+    ];
+    for &(seen, previous, err, want) in table.iter().chain(gap_table) {
         assert_eq!(
             direction::decide(seen, previous, err, half, heads),
             want,
@@ -170,6 +180,18 @@ fn the_turn_table_of_section_5_2() {
             want
         );
     }
+}
+
+#[test]
+fn side_ranges_travel_in_whole_decimetres() {
+    use swarmrt_agent::behaviours::formation::{range_from_wire, range_to_wire};
+    assert_eq!(range_to_wire(None), 0, "nothing seen");
+    assert_eq!(range_from_wire(0), None);
+    assert_eq!(range_to_wire(Some(2.94)), 29);
+    assert_eq!(range_from_wire(29), Some(2.9));
+    // Seen at all is never sent as nothing seen, and far ranges saturate.
+    assert_eq!(range_to_wire(Some(0.0)), 1);
+    assert_eq!(range_to_wire(Some(40.0)), 255);
 }
 
 #[test]

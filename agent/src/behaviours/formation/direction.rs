@@ -28,8 +28,8 @@ impl Dir {
     }
 }
 
-/// Which observers see an obstacle.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// Which observers see an obstacle, and how far the side observers' nearest one is.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Seen {
     /// The left observer.
     pub left: bool,
@@ -37,9 +37,23 @@ pub struct Seen {
     pub middle: bool,
     /// The right observer.
     pub right: bool,
+    /// Metres from the left observer to the nearest obstacle in its cone (when `left`).
+    pub left_range: f64,
+    /// Metres from the right observer to the nearest obstacle in its cone (when `right`).
+    pub right_range: f64,
 }
 
 impl Seen {
+    /// Obstacle or not per observer, with no ranges (they matter only when both sides see).
+    pub fn flags(left: bool, middle: bool, right: bool) -> Seen {
+        Seen {
+            left,
+            middle,
+            right,
+            ..Seen::default()
+        }
+    }
+
     /// True when any observer sees something.
     pub fn any(self) -> bool {
         self.left || self.middle || self.right
@@ -58,6 +72,10 @@ pub fn toward(target_error: f64, half_turn: f64) -> Dir {
     }
 }
 
+/// Side ranges closer than this (metres) count as equal: the radio carries them in whole
+/// decimetres.
+pub const RANGE_TIE: f64 = 0.05;
+
 /// Section 5.2's table. `coin` picks a side (true = left) when an obstacle is dead ahead and the
 /// swarm is heading straight at the target.
 pub fn decide(
@@ -71,6 +89,8 @@ pub fn decide(
         left,
         middle,
         right,
+        left_range,
+        right_range,
     } = seen;
     match (left, middle, right) {
         // Nothing seen: toward the target.
@@ -94,9 +114,19 @@ pub fn decide(
                 side => side,
             },
         },
-        // Left and right but not the middle (a gap ahead): the paper is silent; go straight
-        // through it.
-        (true, false, true) => Dir::Straight,
+        // Left and right but not the middle (a gap ahead): the paper is silent, so this reading
+        // is ours. Steer away from the nearer side, which centres the formation in the gap
+        // instead of letting a converging side close on its edge robot; equal ranges (within
+        // `RANGE_TIE`) go straight through.
+        (true, false, true) => {
+            if (left_range - right_range).abs() <= RANGE_TIE {
+                Dir::Straight
+            } else if left_range < right_range {
+                Dir::Right
+            } else {
+                Dir::Left
+            }
+        }
     }
 }
 

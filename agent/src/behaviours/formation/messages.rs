@@ -18,8 +18,23 @@ pub struct FormationMsg {
     pub psi: f64,
     /// The observer role the sender's lidar was on for: 0 none, 1 middle, 2 left, 3 right.
     pub role: u8,
-    /// Non-zero when that lidar saw an obstacle in the role's cone.
+    /// Non-zero when that lidar saw an obstacle in the role's cone: the distance to the
+    /// nearest one in decimetres (1-255, see [`range_to_wire`]).
     pub obstacle: u8,
+}
+
+/// An observer's verdict on the wire: 0 nothing seen, else the nearest obstacle's distance in
+/// decimetres, at least 1 and at most 255 (25.5 m, beyond every detect range we use).
+pub fn range_to_wire(range: Option<f64>) -> u8 {
+    match range {
+        None => 0,
+        Some(r) => (r * 10.0).round().clamp(1.0, 255.0) as u8,
+    }
+}
+
+/// The inverse of [`range_to_wire`], in metres.
+pub fn range_from_wire(v: u8) -> Option<f64> {
+    (v != 0).then_some(v as f64 / 10.0)
 }
 
 /// A formation robot's note about its own decisions, e.g. `{"role":{"role":2}}` or

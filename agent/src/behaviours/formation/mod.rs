@@ -31,7 +31,7 @@ use self::direction::{Dir, Seen};
 use self::observers::{ObserverRole, Placed};
 use crate::behaviour::{Act, Behaviour};
 use crate::inbox::Heard;
-pub use messages::{FormationMsg, FormationNote};
+pub use messages::{FormationMsg, FormationNote, range_from_wire, range_to_wire};
 pub use params::FormationParams;
 
 /// The desired formation: each robot's offset from the virtual leader, i.e. its start position
@@ -58,7 +58,8 @@ struct LastHeard {
     v: f64,
     psi: f64,
     role: ObserverRole,
-    obstacle: bool,
+    /// The sender's lidar verdict: metres to the nearest obstacle in its cone, if any.
+    obstacle: Option<f64>,
 }
 
 /// One robot's formation state.
@@ -142,9 +143,9 @@ impl Formation {
     }
 
     /// The freshest verdict per role among the messages of the last `verdict_ticks` ticks;
-    /// several robots claiming one role at the same age are or-ed.
+    /// several robots claiming one role at the same age are or-ed (the nearest range kept).
     fn verdicts(&self, tick: u64) -> Seen {
-        let mut best: [(u64, bool); 4] = [(0, false); 4];
+        let mut best: [(u64, Option<f64>); 4] = [(0, None); 4];
         let recent = |h: &LastHeard| {
             h.role != ObserverRole::None
                 && h.sent_tick < tick
@@ -158,24 +159,31 @@ impl Formation {
             if h.sent_tick + 1 > slot.0 {
                 *slot = (h.sent_tick + 1, h.obstacle);
             } else if h.sent_tick + 1 == slot.0 {
-                slot.1 |= h.obstacle;
+                slot.1 = match (slot.1, h.obstacle) {
+                    (Some(a), Some(b)) => Some(a.min(b)),
+                    (a, b) => a.or(b),
+                };
             }
         }
+        let [_, middle, left, right] = best.map(|b| b.1);
         Seen {
-            middle: best[ObserverRole::Middle as usize].1,
-            left: best[ObserverRole::Left as usize].1,
-            right: best[ObserverRole::Right as usize].1,
+            middle: middle.is_some(),
+            left: left.is_some(),
+            right: right.is_some(),
+            left_range: left.unwrap_or(f64::INFINITY),
+            right_range: right.unwrap_or(f64::INFINITY),
         }
     }
 
-    /// Whether this robot's lidar sees an obstacle (not a known teammate) in `role`'s cone.
+    /// The distance to the nearest obstacle (not a known teammate) this robot's lidar sees in
+    /// `role`'s cone within the detect range, if any.
     fn lidar_verdict(
         &self,
         obs: &Observation,
         role: ObserverRole,
         psi: f64,
         mates: &[(f64, f64)],
-    ) -> bool {
+    ) -> Option<f64> {
         let side = self.p.side_offset_deg.to_radians();
         let centre = psi
             + match role {
@@ -184,17 +192,22 @@ impl Formation {
                 _ => 0.0,
             };
         let cone = self.p.cone_deg.to_radians();
-        obs.lidar().iter().enumerate().any(|(k, &range)| {
-            let angle = obs.theta + self.lidar.ray_angle(k);
-            if wrap_angle(angle - centre).abs() > cone || range >= self.p.detect_range {
-                return false;
-            }
-            let hit = (obs.x + range * angle.cos(), obs.y + range * angle.sin());
-            // A hit on a teammate is not an obstacle for the swarm.
-            !mates
-                .iter()
-                .any(|m| (m.0 - hit.0).hypot(m.1 - hit.1) < 2.0 * self.radius + 0.1)
-        })
+        obs.lidar()
+            .iter()
+            .enumerate()
+            .filter(|&(k, &range)| {
+                let angle = obs.theta + self.lidar.ray_angle(k);
+                if wrap_angle(angle - centre).abs() > cone || range >= self.p.detect_range {
+                    return false;
+                }
+                let hit = (obs.x + range * angle.cos(), obs.y + range * angle.sin());
+                // A hit on a teammate is not an obstacle for the swarm.
+                !mates
+                    .iter()
+                    .any(|m| (m.0 - hit.0).hypot(m.1 - hit.1) < 2.0 * self.radius + 0.1)
+            })
+            .map(|(_, &range)| range)
+            .reduce(f64::min)
     }
 }
 
@@ -251,7 +264,7 @@ impl Behaviour for Formation {
                             v,
                             psi,
                             role: ObserverRole::from_u8(role),
-                            obstacle: obstacle != 0,
+                            obstacle: range_from_wire(obstacle),
                         },
                     );
                 }
@@ -306,8 +319,14 @@ impl Behaviour for Formation {
         // 3. This tick's lidar verdict (for the role the lidar was on for), then next tick's
         //    observers in the leader frame (eq. 4-5).
         let mates: Vec<(f64, f64)> = alive.iter().map(|a| (a.1, a.2)).collect();
-        let obstacle = self.role != ObserverRole::None
-            && self.lidar_verdict(obs, self.role, psi_before, &mates);
+        let obstacle = if self.role == ObserverRole::None {
+            None
+        } else {
+            // Quantised as the radio carries it, so own and heard verdicts agree.
+            range_from_wire(range_to_wire(
+                self.lidar_verdict(obs, self.role, psi_before, &mates),
+            ))
+        };
         let verdict_role = self.role;
         let arrived = (leader.0 - self.goal.0).hypot(leader.1 - self.goal.1) <= self.arrive;
         self.stopped |= arrived;
@@ -362,7 +381,7 @@ impl Behaviour for Formation {
                 v: msg.v,
                 psi: msg.psi,
                 role: msg.role as u8,
-                obstacle: msg.obstacle as u8,
+                obstacle: range_to_wire(msg.obstacle),
             },
         );
     }
