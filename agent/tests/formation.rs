@@ -8,6 +8,9 @@ use swarmrt_scenario::rng;
 /// Half a robot width: differences below it count as equal.
 const TOL: f64 = 0.15;
 
+/// Side ranges this close count as equal (the formation's default `gap_tie`).
+const TIE_M: f64 = 0.05;
+
 fn placed(robots: &[(u32, f64, f64)]) -> Vec<Placed> {
     robots
         .iter()
@@ -168,7 +171,7 @@ fn the_turn_table_of_section_5_2() {
     ];
     for &(seen, previous, err, want) in table.iter().chain(gap_table) {
         assert_eq!(
-            direction::decide(seen, previous, err, half, heads),
+            direction::decide(seen, previous, err, half, TIE_M, heads),
             want,
             "{seen:?} after {previous:?}, target error {err}"
         );
@@ -176,7 +179,14 @@ fn the_turn_table_of_section_5_2() {
     // Heading straight at the target with an obstacle dead ahead: the coin picks the side.
     for (coin, want) in [(true, Dir::Left), (false, Dir::Right)] {
         assert_eq!(
-            direction::decide(s(false, true, false), Dir::Straight, 0.0, half, || coin),
+            direction::decide(
+                s(false, true, false),
+                Dir::Straight,
+                0.0,
+                half,
+                TIE_M,
+                || coin
+            ),
             want
         );
     }

@@ -72,17 +72,14 @@ pub fn toward(target_error: f64, half_turn: f64) -> Dir {
     }
 }
 
-/// Side ranges closer than this (metres) count as equal: the radio carries them in whole
-/// decimetres.
-pub const RANGE_TIE: f64 = 0.05;
-
 /// Section 5.2's table. `coin` picks a side (true = left) when an obstacle is dead ahead and the
-/// swarm is heading straight at the target.
+/// swarm is heading straight at the target; side ranges within `tie` metres count as equal.
 pub fn decide(
     seen: Seen,
     previous: Dir,
     target_error: f64,
     half_turn: f64,
+    tie: f64,
     coin: impl FnOnce() -> bool,
 ) -> Dir {
     let Seen {
@@ -119,7 +116,7 @@ pub fn decide(
         // instead of letting a converging side close on its edge robot; equal ranges (within
         // `RANGE_TIE`) go straight through.
         (true, false, true) => {
-            if (left_range - right_range).abs() <= RANGE_TIE {
+            if (left_range - right_range).abs() <= tie {
                 Dir::Straight
             } else if left_range < right_range {
                 Dir::Right

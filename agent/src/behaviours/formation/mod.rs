@@ -294,7 +294,8 @@ impl Behaviour for Formation {
         let to_goal = (self.goal.1 - leader.1).atan2(self.goal.0 - leader.0);
         let target_error = wrap_angle(to_goal - self.psi);
         let (seed, half) = (self.seed, self.turn / 2.0);
-        let dir = direction::decide(seen, self.previous, target_error, half, || {
+        let tie = self.p.gap_tie;
+        let dir = direction::decide(seen, self.previous, target_error, half, tie, || {
             // Every robot draws the same coin for the same tick: the side is common knowledge.
             use rand::Rng as _;
             rng::stream(seed, "formation-side", tick).random::<bool>()

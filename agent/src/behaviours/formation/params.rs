@@ -32,6 +32,10 @@ pub struct FormationParams {
     pub stale_ticks: u32,
     /// An observer's lidar verdict counts for this many ticks after it was sent.
     pub verdict_ticks: u32,
+    /// When both side observers see an obstacle and the middle one does not, ranges within
+    /// this many metres count as equal (straight on); otherwise the swarm turns away from the
+    /// nearer side. Ours: section 5.2 is silent on that case. The radio carries decimetres.
+    pub gap_tie: f64,
 }
 
 impl Default for FormationParams {
@@ -47,6 +51,7 @@ impl Default for FormationParams {
             lookahead: 1.0,
             stale_ticks: 20,
             verdict_ticks: 3,
+            gap_tie: 0.05,
         }
     }
 }
@@ -64,6 +69,7 @@ impl Params for FormationParams {
         k("behaviour.lookahead", r(0.0, 1e6), "m", "How far ahead of its slot, along the swarm heading, a robot steers."),
         k("behaviour.stale_ticks", r(1.0, 1_000_000.0), "ticks", "A neighbour silent this long is left out of the virtual leader."),
         k("behaviour.verdict_ticks", r(1.0, 1_000_000.0), "ticks", "An observer's lidar verdict counts this long after it was sent."),
+        k("behaviour.gap_tie", r(0.0, 1e6), "m", "Both side observers see an obstacle, the middle one not: side ranges within this count as equal (straight on), else turn away from the nearer."),
     ];
 
     fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
@@ -89,6 +95,7 @@ impl Params for FormationParams {
         check_f(keys, "behaviour.epsilon_clear", self.epsilon_clear)?;
         check_f(keys, "behaviour.lookahead", self.lookahead)?;
         check_u(keys, "behaviour.stale_ticks", self.stale_ticks as u64)?;
-        check_u(keys, "behaviour.verdict_ticks", self.verdict_ticks as u64)
+        check_u(keys, "behaviour.verdict_ticks", self.verdict_ticks as u64)?;
+        check_f(keys, "behaviour.gap_tie", self.gap_tie)
     }
 }
