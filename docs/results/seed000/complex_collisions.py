@@ -21,10 +21,14 @@ Runs `swarm run configs/formation_complex.toml` at v = 0.1 / 0.2 / 0.5 m/s, w = 
 - the gap: the free width between the hit obstacle and the nearest other obstacle (or map
   edge), against the formation's width across its heading at that moment.
 
-Usage: complex_collisions.py [--swarm target/release/swarm] [--work DIR] [--sweeps]
+Usage: complex_collisions.py [--swarm target/release/swarm] [--work DIR] [--sweeps] [--gap-tie M]
+With --gap-tie 1000 the traced runs go straight on whenever only the side observers see
+something (the rule before issue 35).
 Prints markdown tables. With --sweeps it also runs the w = 1, 5 deg sweeps on both maps with
 the paper's speeds, 10 seeds each, and prints the reached-target tables, then the complex map
-at w = 5 deg, 0.1 m/s with twice the tick budget.
+at w = 5 deg, 0.1 m/s with twice the tick budget, and at w = 1 deg below 1 m/s with the
+observers reaching 3, 3.5 and 4 m, and the open case's tie (behaviour.gap_tie) at 0.05, 0.45
+and 1000 m (always straight on, the rule before issue 35).
 """
 
 import argparse
@@ -160,11 +164,12 @@ class Map:
         return best, what
 
 
-def run(swarm, speed, seed, out):
+def run(swarm, speed, seed, out, tie=None):
     if not os.path.exists(os.path.join(out, "metrics.json")):
+        extra = [] if tie is None else ["--set", f"behaviour.gap_tie={tie}"]
         subprocess.run(
             [swarm, "run", CONFIG, "--set", f"behaviour.speed={speed}", "--set", "behaviour.turn_deg=1",
-             "--set", f"scenario.seed={seed}", "--out", out, "--force", "--in-process"],
+             "--set", f"scenario.seed={seed}", "--out", out, "--force", "--in-process"] + extra,
             check=True, stdout=subprocess.DEVNULL)
     return out
 
@@ -394,11 +399,66 @@ def long_budget(swarm, out):
     print(f"\nMean reached: {sum(reached) / len(reached):.1f} of 9")
 
 
+def detect_ablation(swarm, out):
+    """w = 1 deg below 1 m/s with the observers reaching 3 (the config), 3.5 and 4 m."""
+    if not os.path.exists(os.path.join(out, "sweep.csv")):
+        subprocess.run([swarm, "sweep", os.path.join(ROOT, "configs", "formation_complex.toml"),
+                        "--vary", "behaviour.speed=0.1,0.2,0.5", "--vary", "behaviour.detect_range=3,3.5,4",
+                        "--set", "behaviour.turn_deg=1", "--seeds", "10", "--jobs", "1", "--in-process",
+                        "--out", out], check=True, stdout=subprocess.DEVNULL)
+    table = collections.defaultdict(list)
+    for r in csv.DictReader(open(os.path.join(out, "sweep.csv"))):
+        table[(float(r["behaviour.detect_range"]), float(r["behaviour.speed"]))].append(float(r["reached_target"]))
+    print("\n`swarm sweep configs/formation_complex.toml --vary behaviour.speed=0.1,0.2,0.5 "
+          "--vary behaviour.detect_range=3,3.5,4 --set behaviour.turn_deg=1 --seeds 10 --jobs 1 --in-process`\n")
+    speeds = [0.1, 0.2, 0.5]
+    print("| detect range (m) \\ v (m/s) | " + " | ".join(f"{v:g}" for v in speeds) + " |")
+    print("|---" * (len(speeds) + 1) + "|")
+    for d in [3.0, 3.5, 4.0]:
+        cells = []
+        for v in speeds:
+            xs = table[(d, v)]
+            mean = sum(xs) / len(xs)
+            cells.append(f"{mean:g}" if mean in (0, 9) else f"{mean:.1f}")
+        print(f"| {d:g} | " + " | ".join(cells) + " |")
+
+
+def tie_ablation(swarm, work):
+    """The open case's tie (behaviour.gap_tie): 0.05 m (ours), 0.45 m, and 1000 m, which is
+    always "straight on", the rule before issue 35. Complex map at w = 1 deg below 1 m/s and
+    simple map at w = 20 deg, 10 seeds."""
+    runs = [("formation_complex", "0.1,0.2,0.5", "1"), ("formation_simple", PAPER_SPEEDS, "20")]
+    for name, speeds, w in runs:
+        out = os.path.join(work, f"tie-{name}")
+        if not os.path.exists(os.path.join(out, "sweep.csv")):
+            subprocess.run([swarm, "sweep", os.path.join(ROOT, "configs", f"{name}.toml"),
+                            "--vary", f"behaviour.speed={speeds}", "--vary", "behaviour.gap_tie=0.05,0.45,1000",
+                            "--set", f"behaviour.turn_deg={w}", "--seeds", "10", "--jobs", "1", "--in-process",
+                            "--out", out], check=True, stdout=subprocess.DEVNULL)
+        table = collections.defaultdict(list)
+        for r in csv.DictReader(open(os.path.join(out, "sweep.csv"))):
+            table[(float(r["behaviour.gap_tie"]), float(r["behaviour.speed"]))].append(float(r["reached_target"]))
+        print(f"\n`swarm sweep configs/{name}.toml --vary behaviour.speed={speeds} "
+              f"--vary behaviour.gap_tie=0.05,0.45,1000 --set behaviour.turn_deg={w} --seeds 10 --jobs 1 --in-process`\n")
+        sp = [float(v) for v in speeds.split(",")]
+        print("| gap_tie (m) \\ v (m/s) | " + " | ".join(f"{v:g}" for v in sp) + " | robots home |")
+        print("|---" * (len(sp) + 2) + "|")
+        for tie in [0.05, 0.45, 1000.0]:
+            cells = []
+            for v in sp:
+                xs = table[(tie, v)]
+                mean = sum(xs) / len(xs)
+                cells.append(f"{mean:g}" if mean in (0, 9) else f"{mean:.1f}")
+            total = sum(sum(table[(tie, v)]) for v in sp)
+            print(f"| {tie:g} | " + " | ".join(cells) + f" | {total:g} |")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--swarm", default=os.path.join(ROOT, "target", "release", "swarm"))
     ap.add_argument("--work", default=os.path.join(ROOT, "target", "seed000_complex_collisions"))
     ap.add_argument("--sweeps", action="store_true")
+    ap.add_argument("--gap-tie", help="behaviour.gap_tie for the traced runs (1000: always straight on)")
     a = ap.parse_args()
     os.makedirs(a.work, exist_ok=True)
     with open(CONFIG, "rb") as f:
@@ -408,13 +468,15 @@ def main():
     downs = collections.defaultdict(list)
     for speed in SPEEDS:
         for seed in SEEDS:
-            out = run(a.swarm, speed, seed, os.path.join(a.work, f"v{speed}-s{seed}"))
+            tag = "" if a.gap_tie is None else f"-tie{a.gap_tie}"
+            out = run(a.swarm, speed, seed, os.path.join(a.work, f"v{speed}-s{seed}{tag}"), a.gap_tie)
             rows, met = analyse(cfg, out, speed, seed)
             reached[speed].append(met["reached_target"])
             downs[speed].append(met["down"])
             allrows.extend(rows)
+    tie = "" if a.gap_tie is None else f" --set behaviour.gap_tie={a.gap_tie}"
     print("Runs: `swarm run configs/formation_complex.toml --set behaviour.speed=V "
-          "--set behaviour.turn_deg=1 --set scenario.seed=S --in-process`, S = 1..5\n")
+          f"--set behaviour.turn_deg=1 --set scenario.seed=S --in-process{tie}`, S = 1..5\n")
     print("| v (m/s) | reached per seed | mean | down per seed | out of time | collisions |")
     print("|---|---|---|---|---|---|")
     for s in SPEEDS:
@@ -486,6 +548,8 @@ def main():
         for name in ["formation_complex", "formation_simple"]:
             sweep(a.swarm, os.path.join(ROOT, "configs", f"{name}.toml"), os.path.join(a.work, f"sweep-{name}"))
         long_budget(a.swarm, os.path.join(a.work, "long-budget"))
+        detect_ablation(a.swarm, os.path.join(a.work, "detect-range"))
+        tie_ablation(a.swarm, a.work)
 
 
 if __name__ == "__main__":

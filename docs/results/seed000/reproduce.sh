@@ -48,5 +48,25 @@ sweep radio_processes configs/formation_simple.toml --vary radio.loss=0,0.2,0.4 
   --vary radio.delay_ticks=0,5 --seeds 2
 
 # The complex map's collisions at w = 1 deg below 1 m/s, traced, and the w = 1, 5 deg sweeps
-# on both maps with 10 seeds; then the same w = 5 deg, 0.1 m/s runs with twice the tick budget.
+# on both maps with 10 seeds, then the ablations (tick budget, detect range, gap_tie).
 python3 "$HERE/complex_collisions.py" --work "$OUT/collisions" --sweeps > "$HERE/complex_collisions.md"
+# The same trace with the rule before issue 35 (straight on when only the side observers see).
+python3 "$HERE/complex_collisions.py" --work "$OUT/collisions" --gap-tie 1000 > "$HERE/complex_collisions_straight.md"
+
+# Steps to the target on the deadlock map, from each run's metrics.json (sweep.csv leaves the
+# column out when the first run it reads never reached).
+python3 - "$OUT/deadlock/runs" > "$HERE/deadlock_steps.md" <<'PY'
+import collections, json, os, statistics, sys
+runs = sys.argv[1]
+steps = collections.defaultdict(list)
+for d in sorted(os.listdir(runs)):
+    key = tuple(p.split("=")[1] for p in d.rsplit("_s", 1)[0].split("_behaviour.")[0:2])
+    m = json.load(open(os.path.join(runs, d, "metrics.json")))
+    if m.get("steps_to_target") is not None:
+        steps[key].append(m["steps_to_target"])
+print("| epsilon_clear | epsilon_obstacle | runs that reached | steps to target (mean ± sd) |")
+print("|---|---|---|---|")
+for key in sorted(steps):
+    s = steps[key]
+    print(f"| {key[0]} | {key[1]} | {len(s)} | {statistics.mean(s):.0f} ± {statistics.stdev(s):.0f} |")
+PY
