@@ -425,32 +425,34 @@ def detect_ablation(swarm, out):
 
 def tie_ablation(swarm, work):
     """The open case's tie (behaviour.gap_tie): 0.05 m (ours), 0.45 m, and 1000 m, which is
-    always "straight on", the rule before issue 35. Complex map at w = 1 deg below 1 m/s and
+    always "straight on", the rule before issue 35. Complex map at w = 1, 5 deg up to 1 m/s and
     simple map at w = 20 deg, 10 seeds."""
-    runs = [("formation_complex", "0.1,0.2,0.5", "1"), ("formation_simple", PAPER_SPEEDS, "20")]
-    for name, speeds, w in runs:
+    runs = [("formation_complex", "0.1,0.2,0.5,1", "1,5"), ("formation_simple", PAPER_SPEEDS, "20")]
+    for name, speeds, ws in runs:
         out = os.path.join(work, f"tie-{name}")
         if not os.path.exists(os.path.join(out, "sweep.csv")):
             subprocess.run([swarm, "sweep", os.path.join(ROOT, "configs", f"{name}.toml"),
                             "--vary", f"behaviour.speed={speeds}", "--vary", "behaviour.gap_tie=0.05,0.45,1000",
-                            "--set", f"behaviour.turn_deg={w}", "--seeds", "10", "--jobs", "1", "--in-process",
+                            "--vary", f"behaviour.turn_deg={ws}", "--seeds", "10", "--jobs", "1", "--in-process",
                             "--out", out], check=True, stdout=subprocess.DEVNULL)
         table = collections.defaultdict(list)
         for r in csv.DictReader(open(os.path.join(out, "sweep.csv"))):
-            table[(float(r["behaviour.gap_tie"]), float(r["behaviour.speed"]))].append(float(r["reached_target"]))
+            key = (float(r["behaviour.turn_deg"]), float(r["behaviour.gap_tie"]), float(r["behaviour.speed"]))
+            table[key].append(float(r["reached_target"]))
         print(f"\n`swarm sweep configs/{name}.toml --vary behaviour.speed={speeds} "
-              f"--vary behaviour.gap_tie=0.05,0.45,1000 --set behaviour.turn_deg={w} --seeds 10 --jobs 1 --in-process`\n")
+              f"--vary behaviour.gap_tie=0.05,0.45,1000 --vary behaviour.turn_deg={ws} --seeds 10 --jobs 1 --in-process`\n")
         sp = [float(v) for v in speeds.split(",")]
-        print("| gap_tie (m) \\ v (m/s) | " + " | ".join(f"{v:g}" for v in sp) + " | robots home |")
+        print("| w, gap_tie (m) \\ v (m/s) | " + " | ".join(f"{v:g}" for v in sp) + " | robots home |")
         print("|---" * (len(sp) + 2) + "|")
-        for tie in [0.05, 0.45, 1000.0]:
-            cells = []
-            for v in sp:
-                xs = table[(tie, v)]
-                mean = sum(xs) / len(xs)
-                cells.append(f"{mean:g}" if mean in (0, 9) else f"{mean:.1f}")
-            total = sum(sum(table[(tie, v)]) for v in sp)
-            print(f"| {tie:g} | " + " | ".join(cells) + f" | {total:g} |")
+        for w in [float(x) for x in ws.split(",")]:
+            for tie in [0.05, 0.45, 1000.0]:
+                cells = []
+                for v in sp:
+                    xs = table[(w, tie, v)]
+                    mean = sum(xs) / len(xs)
+                    cells.append(f"{mean:g}" if mean in (0, 9) else f"{mean:.1f}")
+                total = sum(sum(table[(w, tie, v)]) for v in sp)
+                print(f"| {w:g}°, {tie:g} | " + " | ".join(cells) + f" | {total:g} |")
 
 
 def main():

@@ -70,3 +70,10 @@ for key in sorted(steps):
     s = steps[key]
     print(f"| {key[0]} | {key[1]} | {len(s)} | {statistics.mean(s):.0f} ± {statistics.stdev(s):.0f} |")
 PY
+
+# Two runs the doc describes: the simple map's zigzag through the wall's gap at w = 20 deg,
+# 1.5 m/s (seed 2), and the complex map's detour at w = 5 deg, 0.1 m/s (seed 1).
+cp "$OUT/simple/runs/behaviour.speed=1.5_behaviour.turn_deg=20_s2/trajectory.png" \
+  "$HERE/simple_w20_v1.5_s2_trajectory.png"
+cp "$OUT/complex/runs/behaviour.speed=0.1_behaviour.turn_deg=5_s1/trajectory.png" \
+  "$HERE/complex_w5_v0.1_s1_trajectory.png"
