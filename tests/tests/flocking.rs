@@ -81,10 +81,12 @@ fn calibrated_world_records_are_identical_in_both_modes_with_loss_and_delay() {
     );
 }
 
-/// Fig. 9: one of the five NR-PSO tunes of `docs/results/seed004/tune.sh` (environment 4, the
-/// paper's 7 particles x 25 iterations x 14 evaluations), run again. Its best fitness must lie
-/// within the spread the five tunes report in `tunes.md` (0.956-0.995), and its every
-/// evaluation must be the one the doc's figures were drawn from.
+/// Fig. 9: the first 4 of 25 iterations of one of the five NR-PSO tunes of
+/// `docs/results/seed004/tune.sh` (environment 4, 7 particles, 14 evaluations per iteration),
+/// run again; 4 keep it about 7 s in a debug build. Every evaluation must be the one the doc's
+/// figures were drawn from (the tune is deterministic, so the rest of the committed tune, best
+/// 0.972, follows), and the best must already lie within the spread the five tunes report in
+/// `tunes.md` (0.956-0.995).
 #[test]
 fn an_nr_pso_tune_of_environment_4_lands_within_the_spread_of_the_five() {
     let tmp = tempfile::tempdir().unwrap();
@@ -112,27 +114,34 @@ fn an_nr_pso_tune_of_environment_4_lands_within_the_spread_of_the_five() {
         "--particles",
         "7",
         "--iterations",
-        "25",
+        "4",
         "--evaluations",
         "14",
         "--jobs",
-        "2",
+        "1",
         "--seed",
         "3",
         "--in-process",
         "--out",
         out.to_str().unwrap(),
     ];
-    assert_ok(&swarm(&args, Duration::from_secs(1200)));
+    assert_ok(&swarm(&args, Duration::from_secs(300)));
     let tune: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("tune.json")).unwrap()).unwrap();
-    assert_eq!(tune["evaluations_done"], 350, "{tune}");
+    assert_eq!(tune["evaluations_done"], 56, "{tune}");
     let best = tune["best"]["fitness"].as_f64().unwrap();
     assert!((0.956..=0.995).contains(&best), "best F_p {best}");
-    let committed = workspace().join("docs/results/seed004/tunes/normal_s3.csv");
+    let csv = bytes(&out, "tune.csv");
+    let committed = std::fs::read(workspace().join("docs/results/seed004/tunes/normal_s3.csv"))
+        .expect("the committed tune");
+    assert_eq!(
+        csv.iter().filter(|&&b| b == b'\n').count(),
+        57,
+        "a header and 56 evaluations"
+    );
     assert!(
-        bytes(&out, "tune.csv") == std::fs::read(&committed).unwrap(),
-        "tune.csv differs from {}: rerun docs/results/seed004/tune.sh if the change is meant",
-        committed.display()
+        committed.starts_with(&csv),
+        "tune.csv is not the start of tunes/normal_s3.csv: rerun docs/results/seed004/tune.sh \
+         if the change is meant"
     );
 }
