@@ -91,6 +91,18 @@ def main():
     }
     for n, label in labels.items():
         out.append(row(label, units[n], env3))
+    with open(HERE / "ablation" / "units_env1_fast_wall.csv", newline="") as f:
+        wall = list(csv.DictReader(f))
+    reach = [float(r["com_reaches_3.4m_s"]) for r in wall if r["com_reaches_3.4m_s"]]
+    ends = [float(r["com_x_end_m"]) for r in wall]
+    out += [
+        "",
+        f"**Where the flock is at 12.87 cm/s** (the 12.87 cm/s tune's weights, "
+        f"`ablation/units_env1_fast_wall.csv`): the centre of mass reaches x = 3.4 m, 0.2 m "
+        f"from the far wall, in {len(reach)} of {len(wall)} runs, at {min(reach):.1f}-"
+        f"{max(reach):.1f} s (median {statistics.median(reach):.1f} s) of the "
+        f"{float(wall[0]['run_s']):.1f} s run, and ends at x = {min(ends):.2f}-{max(ends):.2f} m.",
+    ]
     out.append("")
     (HERE / "ablation.md").write_text("\n".join(out))
     print("\n".join(out))

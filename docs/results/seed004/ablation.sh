@@ -80,6 +80,28 @@ for k in alpha beta delta iota zeta kappa mb; do
   FAST+=(--set "behaviour.$k=$(python3 -c "import tomllib; print(tomllib.load(open('$OUT/tune_fast/best.toml','rb'))['behaviour']['$k'])")")
 done
 units env1_fast flocking_obstacles "${ENV1[@]}" "${FAST[@]}"
+# Where the flock is at 12.87 cm/s: per run of the 12.87 cm/s tune's weights, when its centre
+# of mass first reaches x = 3.4 m (the goal's x, 0.2 m from the far wall of the 3.6 m arena)
+# and where it ends, from each run's trajectory.csv (every tick; dt from the sweep's config).
+python3 - "$OUT/units_env1_fast" "$HERE/ablation/units_env1_fast_wall.csv" <<'PY'
+import csv, statistics, sys, tomllib
+from pathlib import Path
+runs, out = Path(sys.argv[1]), sys.argv[2]
+dt = tomllib.load(open("configs/flocking_obstacles.toml", "rb"))["scenario"]["dt"]
+rows = []
+for r in csv.DictReader(open(runs / "sweep.csv", newline="")):
+    xs = {}
+    for t in csv.DictReader(open(runs / r["run_dir"] / "trajectory.csv", newline="")):
+        xs.setdefault(int(t["tick"]), []).append(float(t["x"]))
+    com = [(tick, statistics.mean(v)) for tick, v in sorted(xs.items())]
+    reach = next((tick * dt for tick, x in com if x >= 3.4), "")
+    rows.append((int(r["seed"]), reach, com[-1][1], com[-1][0] * dt))
+with open(out, "w", newline="") as f:
+    w = csv.writer(f)
+    w.writerow(["seed", "com_reaches_3.4m_s", "com_x_end_m", "run_s"])
+    for seed, reach, x, end in sorted(rows):
+        w.writerow([seed, f"{reach:.1f}" if reach != "" else "", f"{x:.3f}", f"{end:.1f}"])
+PY
 units env1_hand flocking_obstacles "${ENV1[@]}"
 units env3_pso flocking_calibrated --vary behaviour.heading=odometry --set robots.start.jitter=0.01 "${WEIGHTS[@]}"
 
