@@ -40,21 +40,49 @@ def group_of(leader, sizes):
     return len(sizes) - 1
 
 
+# The paper's rows (Tables II-IV) per group G1, G2, G3: t_s (s), exploration (s, Table II
+# only), d_m (m), ΔΩ (deg/s²). Its t_s starts after grouping: S2's G2 takes 16.64 s in all with
+# 0.68 s of exploration, less than our grouping and leader choice alone (12 s), so our t_nav
+# (from the leader's first formation) is what the ratio compares.
+PAPER = {
+    "s2": [(28.01, 12.99, 12.7, 44.69), (16.64, 0.68, 9.1, 29.22), (26.4, 14.32, 11.87, 22.45)],
+    "s31": [(71.06, None, 33.21, 17.18), (68.12, None, 32.7, 13.75), (71.48, None, 33.39, 10.37)],
+    "s32": [(71.2, None, 33.59, 22.4), (68.08, None, 31.7, 12.9), (71.44, None, 33.33, 9.96)],
+    "s33": [(71.24, None, 34.03, 29.6), (68.37, None, 31.67, 13.07), (71.52, None, 33.09, 9.88)],
+    "s4": [(131, None, 58.9, 22.69), (184, None, 81.2, 59.22), (223, None, 102.7, 67.45)],
+}
+
+
+def ratio(ours, paper):
+    if ours is None or paper is None or paper == 0:
+        return "-"
+    return f"{ours / paper:.2f}"
+
+
+def trio(ours, paper, digits=1):
+    """ours | paper | ours/paper, as three cells."""
+    return f"{fmt(ours, digits)} | {fmt(paper, 2) if paper is not None else '-'} | {ratio(ours, paper)}"
+
+
 def per_group_table(name, sizes, title):
     rs = runs(name)
     rows = {}
     for m in rs:
         for g in m["grouping"]["per_group"]:
             rows.setdefault(group_of(g["leader"], sizes), []).append(g)
-    print(f"\n{title} ({len(rs)} runs)\n")
-    print("| group | robots | t_s total (s) | t_nav (s) | explore (s) | d_m (m) | ΔΩ (deg/s²) | reached | collisions |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    paper = PAPER[name]
+    print(f"\n{title} ({len(rs)} runs; ours | paper | ours/paper)\n")
+    print("| group | robots | t_s total (s) | t_nav (s) | paper t_s (s) | ratio | explore (s) | paper | ratio "
+          "| d_m (m) | paper | ratio | ΔΩ (deg/s²) | paper | ratio | reached | collisions |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for g in sorted(rows):
         gs = rows[g]
+        p = paper[g] if g < len(paper) else (None, None, None, None)
         print(
             f"| G{g + 1} | {fmt(avg([x['robots'] for x in gs]))} | {fmt(avg([x['t_s'] for x in gs]))} | "
-            f"{fmt(avg([x['t_nav'] for x in gs]))} | {fmt(avg([x['explore_time'] for x in gs]))} | "
-            f"{fmt(avg([x['d_m'] for x in gs]))} | {fmt(avg([x['delta_omega'] for x in gs]))} | "
+            f"{trio(avg([x['t_nav'] for x in gs]), p[0])} | "
+            f"{trio(avg([x['explore_time'] for x in gs]), p[1])} | "
+            f"{trio(avg([x['d_m'] for x in gs]), p[2])} | {trio(avg([x['delta_omega'] for x in gs]), p[3])} | "
             f"{sum(x['reached'] for x in gs)}/{sum(x['robots'] for x in gs)} | {sum(x['collisions'] for x in gs)} |"
         )
     groups = [m["grouping"]["groups"] for m in rs]
