@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""The ablation table of docs/results/seed001.md from the sweeps ablate_gaps.sh ran: per
+variant and group, t_nav, d_m and ΔΩ over 5 seeds with ours/paper (Tables II and III, S31)."""
+import glob
+import json
+import os
+import sys
+from statistics import mean
+
+OUT = sys.argv[1]
+SIZES = [4, 4, 3]
+# The paper's t_s, d_m, ΔΩ, exploration per group (Table II for S2, Table III's S31 for S3).
+PAPER = {
+    "s2": [(28.01, 12.7, 44.69, 12.99), (16.64, 9.1, 29.22, 0.68), (26.4, 11.87, 22.45, 14.32)],
+    "s3": [(71.06, 33.21, 17.18, None), (68.12, 32.7, 13.75, None), (71.48, 33.39, 10.37, None)],
+}
+VARIANTS = [
+    ("base", "the committed config"),
+    ("speed0.45", "behaviour.group_speed 0.35 -> 0.45 m/s"),
+    ("turnacc10", "behaviour.turn_accel 3 -> 10 rad/s²"),
+    ("turnacc1", "behaviour.turn_accel 3 -> 1 rad/s²"),
+    ("radius", "behaviour.radius 1.0 -> 1.5 m (S2), 1.8 -> 1.0 m (S3)"),
+    ("rep0.4", "behaviour.rep_range 0.7 -> 0.4 m"),
+    ("lidar2.5", "range finder and range-and-bearing 4 -> 2.5 m"),
+    ("noshare", "behaviour.share_goal false: each leader must see the goal itself"),
+    ("side", "groups start side by side at x = 16 m (33-34 m from their goals)"),
+    ("side-speed0.45", "side by side and group_speed 0.45 m/s"),
+]
+
+
+def group_of(leader):
+    end = 0
+    for g, s in enumerate(SIZES):
+        end += s
+        if leader < end:
+            return g
+    return len(SIZES) - 1
+
+
+def avg(xs):
+    xs = [x for x in xs if x is not None]
+    return mean(xs) if xs else None
+
+
+def cell(ours, paper):
+    if ours is None:
+        return "-"
+    if paper is None:
+        return f"{ours:.1f}"
+    return f"{ours:.1f} ({ours / paper:.2f})"
+
+
+for sc, title in [("s2", "S2 (Table II)"), ("s3", "S31 (Table III)")]:
+    print(f"\n{title}: each cell ours (ours/paper), mean of 5 seeds, in-process\n")
+    keys = ["t_nav", "d_m", "delta_omega"] + (["explore_time"] if sc == "s2" else [])
+    names = ["t_nav", "d_m", "ΔΩ", "explore"][: len(keys)]
+    print("| variant | change | " + " | ".join(f"G{g} {n}" for n in names for g in (1, 2, 3))
+          + " | reached | collisions |")
+    print("|---|---|" + "---|" * (3 * len(keys) + 2))
+    for v, change in VARIANTS:
+        paths = sorted(glob.glob(os.path.join(OUT, f"{sc}-{v}", "runs", "*", "metrics.json")))
+        if not paths:
+            continue
+        rows = {}
+        reached = robots = coll = 0
+        for p in paths:
+            with open(p) as f:
+                m = json.load(f)
+            reached += m["grouping"]["reached"]
+            robots += m["agents"]
+            coll += m["collisions"]
+            for g in m["grouping"]["per_group"]:
+                rows.setdefault(group_of(g["leader"]), []).append(g)
+        cells = []
+        for i, key in enumerate(keys):
+            for g in range(3):
+                cells.append(cell(avg([x[key] for x in rows.get(g, [])]), PAPER[sc][g][i]))
+        print(f"| {v} | {change} | " + " | ".join(cells) + f" | {reached}/{robots} | {coll} |")
+
+print("\nTable III's first group as it grows (S31-S33): its ΔΩ in deg/s² (ours/paper), 5 seeds, "
+      "in-process\n")
+G1 = {11: (4, 17.18), 12: (5, 22.4), 13: (6, 29.6)}
+print("| variant | G1 of 4 | G1 of 5 | G1 of 6 | G1 of 6 / G1 of 4 (paper 1.72) |")
+print("|---|---|---|---|---|")
+for v in ["base", "turnacc10", "rep0.4", "speed0.45"]:
+    vals = []
+    for n, (size, paper) in G1.items():
+        dos = []
+        for p in sorted(glob.glob(os.path.join(OUT, f"g1-{n}-{v}", "runs", "*", "metrics.json"))):
+            with open(p) as f:
+                m = json.load(f)
+            dos += [g["delta_omega"] for g in m["grouping"]["per_group"] if g["leader"] < size]
+        vals.append((avg(dos), paper))
+    grow = f"{vals[2][0] / vals[0][0]:.2f}" if vals[0][0] and vals[2][0] else "-"
+    print(f"| {v} | " + " | ".join(cell(o, p) for o, p in vals) + f" | {grow} |")
