@@ -93,3 +93,12 @@ for v in ["base", "turnacc10", "rep0.4", "speed0.45"]:
         vals.append((avg(dos), paper))
     grow = f"{vals[2][0] / vals[0][0]:.2f}" if vals[0][0] and vals[2][0] else "-"
     print(f"| {v} | " + " | ".join(cell(o, p) for o, p in vals) + f" | {grow} |")
+
+# S2's finder: the smallest explore time of each run (the leader that saw the goal itself).
+finder = []
+for p in sorted(glob.glob(os.path.join(OUT, "s2-base", "runs", "*", "metrics.json"))):
+    with open(p) as f:
+        m = json.load(f)
+    finder.append(min(g["explore_time"] for g in m["grouping"]["per_group"]))
+print("\nS2 (base): the finder's explore time per seed (s): "
+      + ", ".join(f"{x:.1f}" for x in finder))
