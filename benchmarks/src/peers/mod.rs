@@ -572,7 +572,21 @@ mod tests {
 
     #[test]
     fn live_cpu_reads_this_process() {
-        crate::spin_for(Duration::from_millis(30));
+        // Burn 30 ms of this thread's own CPU (not of the wall clock: on a loaded machine a
+        // 30 ms spin may get only half of it); the process's counters include it.
+        let thread_cpu = || {
+            let mut ts = libc::timespec {
+                tv_sec: 0,
+                tv_nsec: 0,
+            };
+            // SAFETY: clock_gettime only writes the struct we pass.
+            unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+            Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32)
+        };
+        let start = thread_cpu();
+        while thread_cpu() - start < Duration::from_millis(30) {
+            std::hint::spin_loop();
+        }
         let secs = live_cpu_secs(&[std::process::id()]);
         assert!(secs >= 0.02, "{secs}");
         assert_eq!(live_cpu_secs(&[u32::MAX]), 0.0);
