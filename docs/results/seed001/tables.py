@@ -112,6 +112,19 @@ for n in range(4, 9):
     if sel:
         print(summary_row(str(n), sel))
 
+# The paper's Table I: t_s (s), d_m (m), ΔΩ (deg/s²) per group size.
+PAPER_S1 = {4: (102.5, 47.45, 15.87), 5: (103.6, 47.74, 24.57), 6: (103.7, 49.51, 18.28),
+            7: (100.3, 47.23, 22.34), 8: (108.3, 49.31, 18.85)}
+print("\nTable I next to the paper's (ours | paper | ours/paper; our t_nav against its t_s)\n")
+print("| robots | t_nav (s) | paper t_s (s) | ratio | d_m (m) | paper | ratio | ΔΩ (deg/s²) | paper | ratio |")
+print("|---|---|---|---|---|---|---|---|---|---|")
+for n in range(4, 9):
+    g = [m["grouping"] for m in rs if m["agents"] == n]
+    if g:
+        p = PAPER_S1[n]
+        print(f"| {n} | {trio(avg([x['t_nav'] for x in g]), p[0])} | {trio(avg([x['d_m'] for x in g]), p[1])} | "
+              f"{trio(avg([x['delta_omega'] for x in g]), p[2])} |")
+
 per_group_table("s2", [4, 4, 3], "Table II, S2 (three groups explore for one goal; processes)")
 per_group_table("s31", [4, 4, 3], "Table III, S31 (groups of 4, 4, 3; radius 1.8 m; processes)")
 per_group_table("s32", [5, 4, 3], "Table III, S32 (groups of 5, 4, 3)")
