@@ -60,3 +60,6 @@ cp "$OUT/s31/runs/behaviour.radius=1.8_s1/trajectory.png" "$HERE/s31.png"
 cp "$OUT/s4/runs/robots.count=9_s1/trajectory.png" "$HERE/s4.png"
 cp "$OUT/scale_30/runs/robots.count=30_s1/trajectory.png" "$HERE/scale_30.png"
 echo "tables: $HERE/tables.md"
+
+# The ablations behind Tables II-III's gaps (ablation.md; in-process, one job).
+OUT="$OUT/ablation" JOBS=1 bash "$HERE/ablate_gaps.sh"
