@@ -541,7 +541,10 @@ mod tests {
         child.kill().unwrap();
         child.wait().unwrap();
         let turn = turn.expect("the child slept in the window");
-        assert!((1_900.0..4_000.0).contains(&turn), "{turn} us per sleep");
+        // The window cuts a turn at each end, so on a loaded machine, where the child gets
+        // only a few dozen turns in it, the reading may be short by a tenth or so (1.84 ms
+        // seen in CI).
+        assert!((1_500.0..4_000.0).contains(&turn), "{turn} us per sleep");
         assert_eq!(
             robot_turn_us(&[child.id()], TURN_WINDOW),
             None,
