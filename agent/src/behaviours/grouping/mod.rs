@@ -26,7 +26,6 @@ mod classify;
 mod explore;
 mod force;
 mod messages;
-mod nav;
 pub mod metrics;
 mod overlay;
 mod params;
@@ -163,8 +162,6 @@ pub struct Grouping {
     side: f64,
     /// Leader: detours since the way to the goal was last clear.
     detours: u32,
-    /// Leader (`wall-follow`): the distance to the goal where it began following a wall.
-    following: Option<f64>,
     /// Rays of the last scan that hit a robot (by the classifier).
     robot_rays: Vec<bool>,
     /// Leader: its last lidar scan, (world-frame angle, range) per ray.
@@ -226,7 +223,6 @@ impl Grouping {
             progress: (f64::INFINITY, 0),
             detour: None,
             side: if id.is_multiple_of(2) { 1.0 } else { -1.0 },
-            following: None,
             scan: Vec::new(),
             robot_rays: Vec::new(),
             detours: 0,
@@ -485,10 +481,7 @@ impl Grouping {
         form.vel = V2::zeros();
         if self.formed && !self.arrived {
             let target = match self.goal {
-                Some(g) => Some(match self.p.leader_nav {
-                    nav::LeaderNav::Detour => self.unstick(t, measured, g),
-                    nav::LeaderNav::WallFollow => self.wall_follow(measured, g),
-                }),
+                Some(g) => Some(self.unstick(t, measured, g)),
                 None => {
                     let p = self.search_point(t, form.cog);
                     self.stalled_search(t, measured, p)
@@ -538,27 +531,6 @@ impl Grouping {
             return self.next_detour(t, cog, goal_dir, stall);
         }
         goal
-    }
-
-    /// `leader_nav = "wall-follow"` (our addition, `nav.rs`): follow the wall that blocks the
-    /// heading to `goal` until that heading is free and the COG is closer than where the
-    /// following began (a bug algorithm: it leaves dead ends the straight heading leads into).
-    fn wall_follow(&mut self, cog: V2, goal: V2) -> V2 {
-        let to = goal - cog;
-        let d = to.norm();
-        let goal_dir = to.y.atan2(to.x);
-        let clear = self.clear_towards(goal_dir, d);
-        match self.following {
-            Some(d0) if clear && d < d0 - 0.5 => self.following = None,
-            None if !clear => self.following = Some(d),
-            _ => {}
-        }
-        if self.following.is_none() {
-            return goal;
-        }
-        let dir = nav::follow_dir(&self.scan, self.classifier.range, self.side)
-            .unwrap_or(goal_dir);
-        cog + V2::new(dir.cos(), dir.sin()) * DETOUR
     }
 
     /// The next detour point: the free direction nearest the goal's on this leader's side.

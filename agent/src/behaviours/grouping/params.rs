@@ -63,10 +63,6 @@ pub struct GroupingParams {
     pub share_goal: bool,
     /// The centre of the formation stops this close to the goal, metres.
     pub arrive: f64,
-    /// How the leader steers toward a known goal (`nav.rs`; our addition). Left out of the
-    /// resolved config when it is the default, so records of configs without it keep their hashes.
-    #[serde(skip_serializing_if = "super::nav::LeaderNav::is_default")]
-    pub leader_nav: super::nav::LeaderNav,
 }
 
 impl Default for GroupingParams {
@@ -90,7 +86,6 @@ impl Default for GroupingParams {
             search_radius: 8.0,
             share_goal: true,
             arrive: 0.3,
-            leader_nav: super::nav::LeaderNav::Detour,
         }
     }
 }
@@ -116,7 +111,6 @@ impl Params for GroupingParams {
         k("behaviour.search_radius", r(0.0, 1e6), "m", "Maximum search radius r of eq. 13."),
         k("behaviour.share_goal", Bounds::Any, "", "A leader that finds the goal tells the other leaders (false when each group has its own goal)."),
         k("behaviour.arrive", r(0.0, 1e3), "m", "The formation's centre stops this close to the goal."),
-        k("behaviour.leader_nav", Bounds::Any, "", "How the leader steers toward a known goal: straight with detours after a stall, or following the blocking wall (bug-style).").also("`\"detour\"` or `\"wall-follow\"`"),
     ];
 
     fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
