@@ -25,6 +25,7 @@ mod circle;
 mod classify;
 mod explore;
 mod force;
+mod map;
 mod messages;
 pub mod metrics;
 mod overlay;
@@ -32,7 +33,7 @@ mod params;
 
 pub use messages::{GroupMsg, GroupNote, MAX_GROUP};
 pub use metrics::{RobotRun, delta_omega, robot_runs};
-pub use params::{GroupingParams, Sense};
+pub use params::{GroupingParams, LeaderNav, Sense};
 
 /// The equations, public for tests and for anyone reusing them.
 pub mod equations {
@@ -55,6 +56,7 @@ use crate::consensus::{Notes, Rng, stream};
 use crate::inbox::Heard;
 use classify::Classifier;
 use force::V2;
+use map::LidarMap;
 
 /// Seconds between a robot's classifier notes.
 const CLASSIFIER_NOTE_PERIOD: f64 = 10.0;
@@ -86,6 +88,18 @@ const STOP_TIME: f64 = 0.4;
 const SETTLED: f64 = 0.03;
 /// Seconds a search position is pursued before a new one is drawn.
 const SEARCH_LIMIT: f64 = 60.0;
+/// Side of a cell of the leader's lidar map, metres.
+const MAP_CELL: f64 = 0.25;
+/// Metres of the map path ahead of the formation's centre that it heads for.
+const LOOKAHEAD: f64 = 1.5;
+/// Metres a circle's robots keep from walls beyond their slot (the map path's clearance).
+const WALL_MARGIN: f64 = 0.2;
+/// Ticks between a robot's checks of the way to its slot through its map.
+const WAY_EVERY: u64 = 5;
+/// Metres a way to the slot must be longer than the straight line to count as round a wall.
+const DETOUR_SLACK: f64 = 0.5;
+/// A lidar hit this close to a robot the range-and-bearing sensor reports is that robot.
+const ROBOT_MARGIN: f64 = 0.15;
 
 /// A formation as the leader sent it.
 #[derive(Debug, Clone, PartialEq)]
@@ -166,6 +180,12 @@ pub struct Grouping {
     robot_rays: Vec<bool>,
     /// Leader: its last lidar scan, (world-frame angle, range) per ray.
     scan: Vec<(f64, f64)>,
+    /// With `leader_nav = "map"`: the walls its range finder has seen.
+    map: Option<LidarMap>,
+    /// With a map: the point on its way round a wall to its slot, when a wall is between.
+    waypoint: Option<V2>,
+    /// Robot radius, metres.
+    body: f64,
     /// The turn rate it commanded last tick (for `turn_accel`).
     omega: f64,
     rng: Rng,
@@ -224,6 +244,9 @@ impl Grouping {
             detour: None,
             side: if id.is_multiple_of(2) { 1.0 } else { -1.0 },
             scan: Vec::new(),
+            map: None,
+            waypoint: None,
+            body: cfg.robots.radius,
             robot_rays: Vec::new(),
             detours: 0,
             omega: 0.0,
@@ -417,6 +440,14 @@ impl Grouping {
             v
         };
         let r = self.p.radius;
+        // Where a new numbering centres the circle: with a map, off any wall it has seen.
+        let anchor = match &mut self.map {
+            Some(map) if self.p.leader_nav == LeaderNav::Map => {
+                map.roomy(measured, r + self.body + WALL_MARGIN, r)
+            }
+            _ => measured,
+        };
+        let mut lag = 0.0;
         let mut form = match self.form.take() {
             Some(f) => {
                 let mut known = f.members.clone();
@@ -436,6 +467,7 @@ impl Grouping {
                     })
                     .collect();
                 let worst = circle::worst_error(&placed, cog, r, n, f.c_diff);
+                lag = worst;
                 if known != ids || (self.formed && worst > BROKEN * r) {
                     None
                 } else {
@@ -470,10 +502,10 @@ impl Grouping {
                 n: order.len() as u8,
             });
             Form {
-                cog: measured,
+                cog: anchor,
                 vel: V2::zeros(),
                 radius: r,
-                c_diff: circle::c_diff(me, measured),
+                c_diff: circle::c_diff(me, anchor),
                 stamp: t,
                 members: order,
             }
@@ -481,6 +513,7 @@ impl Grouping {
         form.vel = V2::zeros();
         if self.formed && !self.arrived {
             let target = match self.goal {
+                Some(g) if self.p.leader_nav == LeaderNav::Map => Some(self.route(form.cog, g)),
                 Some(g) => Some(self.unstick(t, measured, g)),
                 None => {
                     let p = self.search_point(t, form.cog);
@@ -494,12 +527,58 @@ impl Grouping {
                     act.note(GroupNote::Arrived);
                 } else if to.norm() > 1e-6 {
                     // Slow down over the last metre so the centre does not overshoot.
-                    let speed = self.p.group_speed * to.norm().min(1.0);
+                    let mut speed = self.p.group_speed * to.norm().min(1.0);
+                    if self.p.leader_nav == LeaderNav::Map {
+                        // Through a maze the centre waits for a lagging robot, which would
+                        // otherwise cut a corner of the wall toward its slot.
+                        speed *= (1.0 - (lag - FORMED * r) / ((BROKEN - FORMED) * r)).clamp(0.0, 1.0);
+                    }
                     form.vel = to / to.norm() * speed;
                 }
             }
         }
         self.form = Some(form);
+    }
+
+    /// Marks the walls of this scan in the robot's map: hits of rays the classifier did not
+    /// take for a robot, and not where the range-and-bearing sensor reports one.
+    fn map_scan(&mut self, obs: &Observation) {
+        let me = V2::new(obs.x, obs.y);
+        let seen: Vec<V2> = obs
+            .neighbours()
+            .iter()
+            .map(|n| {
+                let a = obs.theta + n.bearing;
+                me + V2::new(a.cos(), a.sin()) * n.range
+            })
+            .collect();
+        let range = self.classifier.range;
+        let near = self.body + ROBOT_MARGIN;
+        let map = self
+            .map
+            .get_or_insert_with(|| LidarMap::new(self.bounds, MAP_CELL));
+        for (k, (&d, &a)) in obs.lidar().iter().zip(&self.angles).enumerate() {
+            if d >= range - 1e-9 || self.robot_rays.get(k).copied().unwrap_or(false) {
+                continue;
+            }
+            let a = obs.theta + a;
+            let p = me + V2::new(a.cos(), a.sin()) * d;
+            if seen.iter().all(|r| (r - p).norm() > near) {
+                map.hit(p);
+            }
+        }
+    }
+
+    /// Where the centre heads with `leader_nav = "map"`: `LOOKAHEAD` metres along the cheapest
+    /// path to `goal` through the leader's map, with room for the circle's robots where the
+    /// way allows; straight for the goal while no way is known (a map that closes it).
+    fn route(&mut self, cog: V2, goal: V2) -> V2 {
+        let Some(map) = &mut self.map else { return goal };
+        let need = self.p.radius + self.body + WALL_MARGIN;
+        match map.route(cog, goal, need, self.body + 0.05) {
+            Some(path) => map::ahead(&path, LOOKAHEAD),
+            None => goal,
+        }
     }
 
     /// Global avoidance for a stalled group (our addition, a bug algorithm at the group's
@@ -637,9 +716,30 @@ impl Grouping {
             return;
         };
         let me = V2::new(obs.x, obs.y);
-        let want = f.vel + circle::attraction(self.p.k_att, me, slot);
+        if let Some(map) = &mut self.map
+            && (obs.tick + self.id as u64).is_multiple_of(WAY_EVERY)
+        {
+            // A slot behind a wall (the circle turned round its end) is reached round it.
+            let body = self.body + 0.05;
+            self.waypoint = if map.straight(me, slot, body) {
+                None
+            } else {
+                map.route(me, slot, self.body + WALL_MARGIN, body)
+                    .filter(|path| length(path) > (slot - me).norm() + DETOUR_SLACK)
+                    .map(|path| map::ahead(&path, 1.0))
+            };
+        }
+        let want = match self.waypoint {
+            Some(w) if (w - me).norm() > 0.1 => (w - me) / (w - me).norm() * self.p.group_speed,
+            _ => f.vel + circle::attraction(self.p.k_att, me, slot),
+        };
         self.drive(obs, want, act);
     }
+}
+
+/// A path's length, metres.
+fn length(path: &[V2]) -> f64 {
+    path.windows(2).map(|w| (w[1] - w[0]).norm()).sum()
 }
 
 fn form_msg(f: &Form) -> GroupMsg {
@@ -675,6 +775,9 @@ impl Behaviour for Grouping {
         let t = obs.tick;
         act.lidar_on = true;
         let sensed = self.sensed(obs);
+        if self.p.leader_nav == LeaderNav::Map {
+            self.map_scan(obs);
+        }
         let note_every = (CLASSIFIER_NOTE_PERIOD / self.dt).round().max(1.0) as u64;
         if t > 0 && t.is_multiple_of(note_every) && self.correct + self.wrong > 0 {
             act.note(GroupNote::Classified {

@@ -17,6 +17,18 @@ pub enum Sense {
     RangeBearing,
 }
 
+/// How a leader steers its formation toward a known goal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LeaderNav {
+    /// Straight for the goal, with sideways detours after a stall (a bug algorithm at the
+    /// group's scale, `unstick` in mod.rs): enough for single walls and doors.
+    Detour,
+    /// The cheapest way through a map of the walls its own range finder has seen, unseen
+    /// space taken as free (`map.rs`): mazes with dead ends and distant doors (S4).
+    Map,
+}
+
 /// Parameters of the grouping behaviour. The paper prints none of its values; the defaults
 /// are ours for a 0.2 m robot at up to 0.5 m/s, chosen so that S1-S4 run as the paper
 /// describes (docs/results/seed001.md).
@@ -63,6 +75,8 @@ pub struct GroupingParams {
     pub share_goal: bool,
     /// The centre of the formation stops this close to the goal, metres.
     pub arrive: f64,
+    /// How the leader steers toward a known goal.
+    pub leader_nav: LeaderNav,
 }
 
 impl Default for GroupingParams {
@@ -86,6 +100,7 @@ impl Default for GroupingParams {
             search_radius: 8.0,
             share_goal: true,
             arrive: 0.3,
+            leader_nav: LeaderNav::Detour,
         }
     }
 }
@@ -111,6 +126,7 @@ impl Params for GroupingParams {
         k("behaviour.search_radius", r(0.0, 1e6), "m", "Maximum search radius r of eq. 13."),
         k("behaviour.share_goal", Bounds::Any, "", "A leader that finds the goal tells the other leaders (false when each group has its own goal)."),
         k("behaviour.arrive", r(0.0, 1e3), "m", "The formation's centre stops this close to the goal."),
+        k("behaviour.leader_nav", Bounds::Any, "", "How the leader steers toward a known goal: straight with detours after a stall, or the cheapest way through its own lidar map (mazes)."),
     ];
 
     fn validate(&self, cfg: &Config) -> Result<(), KeyError> {
