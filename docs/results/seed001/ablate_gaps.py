@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The ablation table of docs/results/seed001.md from the sweeps ablate_gaps.sh ran: per
-variant and group, t_nav, d_m and ΔΩ over 5 seeds with ours/paper (Tables II and III, S31)."""
+variant and group, t_nav, d_m and ΔΩ over 5 seeds with ours/paper (Tables II, III's S31, IV)."""
 import glob
 import json
 import os
@@ -8,11 +8,12 @@ import sys
 from statistics import mean
 
 OUT = sys.argv[1]
-SIZES = [4, 4, 3]
+SIZES = {"s2": [4, 4, 3], "s3": [4, 4, 3], "s4": [3, 3, 3]}
 # The paper's t_s, d_m, ΔΩ, exploration per group (Table II for S2, Table III's S31 for S3).
 PAPER = {
     "s2": [(28.01, 12.7, 44.69, 12.99), (16.64, 9.1, 29.22, 0.68), (26.4, 11.87, 22.45, 14.32)],
     "s3": [(71.06, 33.21, 17.18, None), (68.12, 32.7, 13.75, None), (71.48, 33.39, 10.37, None)],
+    "s4": [(131.0, 58.9, 22.69, None), (184.0, 81.2, 59.22, None), (223.0, 102.7, 67.45, None)],
 }
 VARIANTS = [
     ("base", "the committed config"),
@@ -25,16 +26,17 @@ VARIANTS = [
     ("noshare", "behaviour.share_goal false: each leader must see the goal itself"),
     ("side", "groups start side by side at x = 16 m (33-34 m from their goals)"),
     ("side-speed0.45", "side by side and group_speed 0.45 m/s"),
+    ("detour", "behaviour.leader_nav map -> detour (S1-S3's leader: no map)"),
 ]
 
 
-def group_of(leader):
+def group_of(leader, sizes):
     end = 0
-    for g, s in enumerate(SIZES):
+    for g, s in enumerate(sizes):
         end += s
         if leader < end:
             return g
-    return len(SIZES) - 1
+    return len(sizes) - 1
 
 
 def avg(xs):
@@ -50,7 +52,7 @@ def cell(ours, paper):
     return f"{ours:.1f} ({ours / paper:.2f})"
 
 
-for sc, title in [("s2", "S2 (Table II)"), ("s3", "S31 (Table III)")]:
+for sc, title in [("s2", "S2 (Table II)"), ("s3", "S31 (Table III)"), ("s4", "S4 (Table IV)")]:
     print(f"\n{title}: each cell ours (ours/paper), mean of 5 seeds, in-process\n")
     keys = ["t_nav", "d_m", "delta_omega"] + (["explore_time"] if sc == "s2" else [])
     names = ["t_nav", "d_m", "ΔΩ", "explore"][: len(keys)]
@@ -70,7 +72,7 @@ for sc, title in [("s2", "S2 (Table II)"), ("s3", "S31 (Table III)")]:
             robots += m["agents"]
             coll += m["collisions"]
             for g in m["grouping"]["per_group"]:
-                rows.setdefault(group_of(g["leader"]), []).append(g)
+                rows.setdefault(group_of(g["leader"], SIZES[sc]), []).append(g)
         cells = []
         for i, key in enumerate(keys):
             for g in range(3):

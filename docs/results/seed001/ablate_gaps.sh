@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Ablations behind the gaps of Tables II-III (docs/results/seed001.md, "Where the gaps come
-# from"): S2 and S31 rerun with one config key changed at a time, 5 seeds each, in-process
+# Ablations behind the gaps of Tables II-IV (docs/results/seed001.md, "Where the gaps come
+# from"): S2, S31 and S4 rerun with one config key changed at a time, 5 seeds each, in-process
 # (the same bytes as processes). Run from the repository root after `cargo build --release`;
 # writes ablation.md next to this script. Scratch output goes to $OUT (default /tmp/seed001_abl).
 set -euo pipefail
@@ -15,7 +15,7 @@ run() { # run <scenario file> <label> [--set key=value ...]
   local cfg=$1 label=$2
   shift 2
   rm -rf "$OUT/$label"
-  "$SWARM" sweep "$cfg" --vary robots.count=11 --seeds "$SEEDS" --start-seed 1 --jobs "$JOBS" \
+  "$SWARM" sweep "$cfg" --vary robots.count="${COUNT:-11}" --seeds "$SEEDS" --start-seed 1 --jobs "$JOBS" \
     --in-process --out "$OUT/$label" --metric grouping.t_nav "$@" > /dev/null
 }
 
@@ -44,6 +44,10 @@ run configs/grouping_s2.toml s2-noshare --set behaviour.share_goal=false
 SIDE='robots.start.groups=[{x=16.0,y=10.0,goal=[49.0,10.0]},{x=16.0,y=3.5,goal=[50.0,4.5]},{x=16.0,y=16.5,goal=[50.0,15.5]}]'
 run configs/grouping_s3.toml s3-side --set "$SIDE"
 run configs/grouping_s3.toml s3-side-speed0.45 --set "$SIDE" --set behaviour.group_speed=0.45
+# S4 (9 robots): the faster centre, and the S1-S3 leader (straight with detours, no map).
+COUNT=9 run configs/grouping_s4.toml s4-base
+COUNT=9 run configs/grouping_s4.toml s4-speed0.45 --set behaviour.group_speed=0.45
+COUNT=9 run configs/grouping_s4.toml s4-detour --set behaviour.leader_nav=detour
 
 # Table III's first group grows from 4 to 6 robots (S31-S33): its ΔΩ, with the default wheels,
 # without their inertia, with a shorter repulsion range and with the faster centre.
