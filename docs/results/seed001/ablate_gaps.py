@@ -27,6 +27,8 @@ VARIANTS = [
     ("side", "groups start side by side at x = 16 m (33-34 m from their goals)"),
     ("side-speed0.45", "side by side and group_speed 0.45 m/s"),
     ("detour", "behaviour.leader_nav map -> detour (S1-S3's leader: no map)"),
+    ("loss0.4", "radio.loss 0 -> 0.4"),
+    ("delay5", "radio.delay_ticks 0 -> 5"),
 ]
 
 

@@ -48,6 +48,9 @@ run configs/grouping_s3.toml s3-side-speed0.45 --set "$SIDE" --set behaviour.gro
 COUNT=9 run configs/grouping_s4.toml s4-base
 COUNT=9 run configs/grouping_s4.toml s4-speed0.45 --set behaviour.group_speed=0.45
 COUNT=9 run configs/grouping_s4.toml s4-detour --set behaviour.leader_nav=detour
+# S4 over a hostile radio: the formations and members' reports lost or late.
+COUNT=9 run configs/grouping_s4.toml s4-loss0.4 --set radio.loss=0.4
+COUNT=9 run configs/grouping_s4.toml s4-delay5 --set radio.delay_ticks=5
 
 # Table III's first group grows from 4 to 6 robots (S31-S33): its ΔΩ, with the default wheels,
 # without their inertia, with a shorter repulsion range and with the faster centre.
