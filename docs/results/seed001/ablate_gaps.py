@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """The ablation table of docs/results/seed001.md from the sweeps ablate_gaps.sh ran: per
 variant and group, t_nav, d_m and ΔΩ over 5 seeds with ours/paper (Tables II, III's S31, IV)."""
+import csv
 import glob
 import json
+import math
 import os
 import sys
 from statistics import mean
@@ -27,6 +29,7 @@ VARIANTS = [
     ("side", "groups start side by side at x = 16 m (33-34 m from their goals)"),
     ("side-speed0.45", "side by side and group_speed 0.45 m/s"),
     ("detour", "behaviour.leader_nav map -> detour (S1-S3's leader: no map)"),
+    ("nopockets", "S4 without the caps of group 1's two dead-end pockets"),
     ("loss0.4", "radio.loss 0 -> 0.4"),
     ("delay5", "radio.delay_ticks 0 -> 5"),
 ]
@@ -106,3 +109,45 @@ for p in sorted(glob.glob(os.path.join(OUT, "s2-base", "runs", "*", "metrics.jso
     finder.append(min(g["explore_time"] for g in m["grouping"]["per_group"]))
 print("\nS2 (base): the finder's explore time per seed (s): "
       + ", ".join(f"{x:.1f}" for x in finder))
+
+
+def delta_omega(headings, dt):
+    """Eq. 16 as metrics.rs computes it: mean |Ω(i) - Ω(i-1)| / dt, deg/s²."""
+    wrap = lambda a: (a + math.pi) % (2 * math.pi) - math.pi
+    om = [wrap(b - a) / dt for a, b in zip(headings, headings[1:])]
+    if len(om) < 2:
+        return None
+    return math.degrees(sum(abs(b - a) / dt for a, b in zip(om, om[1:])) / (len(om) - 1))
+
+
+# S4 (base): where group 1's ΔΩ comes from. Each robot's headings until it reached the goal,
+# split at its leader's first formation (t_s - t_nav): grouping, leader choice and forming
+# before, the maze after.
+print("\nS4 (base): ΔΩ (deg/s²) per group before and after the first formation, 5 seeds\n")
+print("| group | whole run | grouping and forming | navigating | paper |")
+print("|---|---|---|---|---|")
+split = {}
+for p in sorted(glob.glob(os.path.join(OUT, "s4-base", "runs", "*", "metrics.json"))):
+    with open(p) as f:
+        m = json.load(f)
+    dt = 0.1
+    heads = {}
+    with open(os.path.join(os.path.dirname(p), "trajectory.csv")) as f:
+        for row in csv.DictReader(f):
+            if row["state"] == "active":
+                heads.setdefault(int(row["id"]), []).append((int(row["tick"]), float(row["theta"])))
+    for r in m["grouping"]["per_robot"]:
+        if r["t_s"] is None or r["t_nav"] is None:
+            continue
+        start, end = round((r["t_s"] - r["t_nav"]) / dt), round(r["t_s"] / dt)
+        h = heads[r["id"]]
+        g = group_of(r["leader"], SIZES["s4"])
+        split.setdefault(g, []).append((
+            delta_omega([t for k, t in h if k <= end], dt),
+            delta_omega([t for k, t in h if k <= start], dt),
+            delta_omega([t for k, t in h if start <= k <= end], dt),
+        ))
+for g in range(3):
+    cols = [avg([x[i] for x in split.get(g, [])]) for i in range(3)]
+    print(f"| G{g + 1} | " + " | ".join(f"{c:.1f}" if c is not None else "-" for c in cols)
+          + f" | {PAPER['s4'][g][2]} |")

@@ -48,6 +48,14 @@ run configs/grouping_s3.toml s3-side-speed0.45 --set "$SIDE" --set behaviour.gro
 COUNT=9 run configs/grouping_s4.toml s4-base
 COUNT=9 run configs/grouping_s4.toml s4-speed0.45 --set behaviour.group_speed=0.45
 COUNT=9 run configs/grouping_s4.toml s4-detour --set behaviour.leader_nav=detour
+# S4 without the two caps that make group 1's dead-end pockets (its walls and doors kept).
+NOPOCKETS=$(python3 -c "
+import tomllib
+c = tomllib.load(open('configs/grouping_s4.toml', 'rb'))
+rs = [r for r in c['map']['rectangles'] if not (r['y_min'] == 8.0 and r['y_max'] == 9.0)]
+print('map.rectangles=[' + ','.join('{x_min=%s,y_min=%s,x_max=%s,y_max=%s}'
+      % (r['x_min'], r['y_min'], r['x_max'], r['y_max']) for r in rs) + ']')")
+COUNT=9 run configs/grouping_s4.toml s4-nopockets --set "$NOPOCKETS"
 # S4 over a hostile radio: the formations and members' reports lost or late.
 COUNT=9 run configs/grouping_s4.toml s4-loss0.4 --set radio.loss=0.4
 COUNT=9 run configs/grouping_s4.toml s4-delay5 --set radio.delay_ticks=5
