@@ -63,3 +63,6 @@ echo "tables: $HERE/tables.md"
 
 # The ablations behind Tables II-III's gaps (ablation.md; in-process, one job).
 OUT="$OUT/ablation" JOBS=1 bash "$HERE/ablate_gaps.sh"
+
+# Why S3's group 1 keeps its ΔΩ as it grows (domega.md; in-process, one job).
+OUT="$OUT/domega" JOBS=1 bash "$HERE/domega.sh"
