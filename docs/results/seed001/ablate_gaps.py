@@ -28,6 +28,7 @@ VARIANTS = [
     ("noshare", "behaviour.share_goal false: each leader must see the goal itself"),
     ("side", "groups start side by side at x = 16 m (33-34 m from their goals)"),
     ("side-speed0.45", "side by side and group_speed 0.45 m/s"),
+    ("goalsinline", "groups 2 and 3 aim at y = 8 and 12 m, inside the corridor (not 4.5 and 15.5)"),
     ("detour", "behaviour.leader_nav map -> detour (S1-S3's leader: no map)"),
     ("nopockets", "S4 without the caps of group 1's two dead-end pockets"),
     ("loss0.4", "radio.loss 0 -> 0.4"),
@@ -151,3 +152,34 @@ for g in range(3):
     cols = [avg([x[i] for x in split.get(g, [])]) for i in range(3)]
     print(f"| G{g + 1} | " + " | ".join(f"{c:.1f}" if c is not None else "-" for c in cols)
           + f" | {PAPER['s4'][g][2]} |")
+
+# S3 (base): where groups 2 and 3 turn. Each robot's headings while navigating (from its
+# leader's first formation until it reached the goal), split by its x: before the corridor
+# (x < 21 m) and in it (21-41 m).
+print("\nS31 (base): ΔΩ (deg/s²) per group while navigating, before and in the corridor, 5 seeds\n")
+print("| group | before the corridor | in the corridor | paper (whole run) |")
+print("|---|---|---|---|")
+phases = {}
+for p in sorted(glob.glob(os.path.join(OUT, "s3-base", "runs", "*", "metrics.json"))):
+    with open(p) as f:
+        m = json.load(f)
+    dt = 0.1
+    rows = {}
+    with open(os.path.join(os.path.dirname(p), "trajectory.csv")) as f:
+        for row in csv.DictReader(f):
+            if row["state"] == "active":
+                rows.setdefault(int(row["id"]), []).append(
+                    (int(row["tick"]), float(row["theta"]), float(row["x"])))
+    for r in m["grouping"]["per_robot"]:
+        if r["t_s"] is None or r["t_nav"] is None:
+            continue
+        start, end = round((r["t_s"] - r["t_nav"]) / dt), round(r["t_s"] / dt)
+        nav = [(t, x) for k, t, x in rows[r["id"]] if start <= k <= end]
+        phases.setdefault(group_of(r["leader"], SIZES["s3"]), []).append((
+            delta_omega([t for t, x in nav if x < 21.0], dt),
+            delta_omega([t for t, x in nav if 21.0 <= x <= 41.0], dt),
+        ))
+for g in range(3):
+    cols = [avg([x[i] for x in phases.get(g, [])]) for i in range(2)]
+    print(f"| G{g + 1} | " + " | ".join(f"{c:.1f}" if c is not None else "-" for c in cols)
+          + f" | {PAPER['s3'][g][2]} |")

@@ -44,6 +44,10 @@ run configs/grouping_s2.toml s2-noshare --set behaviour.share_goal=false
 SIDE='robots.start.groups=[{x=16.0,y=10.0,goal=[49.0,10.0]},{x=16.0,y=3.5,goal=[50.0,4.5]},{x=16.0,y=16.5,goal=[50.0,15.5]}]'
 run configs/grouping_s3.toml s3-side --set "$SIDE"
 run configs/grouping_s3.toml s3-side-speed0.45 --set "$SIDE" --set behaviour.group_speed=0.45
+# S3 only: groups 2 and 3 aim at goals 2 m either side of the corridor's axis (y 8 and 12)
+# instead of 4.5 and 15.5 m, which lie beyond its walls (y 6-14): their circles stop rubbing on
+# the walls.
+run configs/grouping_s3.toml s3-goalsinline --set 'robots.start.groups=[{x=16.0,y=10.0,goal=[49.0,10.0]},{x=9.5,y=10.0,goal=[50.0,8.0]},{x=3.0,y=10.0,goal=[50.0,12.0]}]'
 # S4 (9 robots): the faster centre, and the S1-S3 leader (straight with detours, no map).
 COUNT=9 run configs/grouping_s4.toml s4-base
 COUNT=9 run configs/grouping_s4.toml s4-speed0.45 --set behaviour.group_speed=0.45
