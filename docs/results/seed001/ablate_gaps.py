@@ -9,6 +9,8 @@ import os
 import sys
 from statistics import mean
 
+from runs import avg, group_of
+
 OUT = sys.argv[1]
 SIZES = {"s2": [4, 4, 3], "s3": [4, 4, 3], "s4": [3, 3, 3]}
 # The paper's t_s, d_m, ΔΩ, exploration per group (Table II for S2, Table III's S31 for S3).
@@ -36,18 +38,6 @@ VARIANTS = [
 ]
 
 
-def group_of(leader, sizes):
-    end = 0
-    for g, s in enumerate(sizes):
-        end += s
-        if leader < end:
-            return g
-    return len(sizes) - 1
-
-
-def avg(xs):
-    xs = [x for x in xs if x is not None]
-    return mean(xs) if xs else None
 
 
 def cell(ours, paper):
@@ -121,37 +111,47 @@ def delta_omega(headings, dt):
     return math.degrees(sum(abs(b - a) / dt for a, b in zip(om, om[1:])) / (len(om) - 1))
 
 
+def navigations(sc):
+    """Per robot of the base runs of `sc` that reached the goal: its group, its active rows
+    (tick, heading, x), the tick of its leader's first formation and the tick it arrived."""
+    dt = 0.1
+    for p in sorted(glob.glob(os.path.join(OUT, f"{sc}-base", "runs", "*", "metrics.json"))):
+        with open(p) as f:
+            m = json.load(f)
+        rows = {}
+        with open(os.path.join(os.path.dirname(p), "trajectory.csv")) as f:
+            for row in csv.DictReader(f):
+                if row["state"] == "active":
+                    rows.setdefault(int(row["id"]), []).append(
+                        (int(row["tick"]), float(row["theta"]), float(row["x"])))
+        for r in m["grouping"]["per_robot"]:
+            if r["t_s"] is None or r["t_nav"] is None:
+                continue
+            start, end = round((r["t_s"] - r["t_nav"]) / dt), round(r["t_s"] / dt)
+            yield group_of(r["leader"], SIZES[sc]), rows[r["id"]], start, end
+
+
+def phase_table(sc, parts):
+    """Per group, the mean over robots of ΔΩ over each part ((tick, x, start, end) -> kept)."""
+    by_group = {}
+    for g, rows, start, end in navigations(sc):
+        by_group.setdefault(g, []).append([
+            delta_omega([t for k, t, x in rows if keep(k, x, start, end)], 0.1)
+            for keep in parts])
+    for g in range(3):
+        cols = [avg([x[i] for x in by_group.get(g, [])]) for i in range(len(parts))]
+        print(f"| G{g + 1} | " + " | ".join(f"{c:.1f}" if c is not None else "-" for c in cols)
+              + f" | {PAPER[sc][g][2]} |")
+
+
 # S4 (base): where group 1's ΔΩ comes from. Each robot's headings until it reached the goal,
 # split at its leader's first formation (t_s - t_nav): grouping, leader choice and forming
 # before, the maze after.
 print("\nS4 (base): ΔΩ (deg/s²) per group before and after the first formation, 5 seeds\n")
 print("| group | whole run | grouping and forming | navigating | paper |")
 print("|---|---|---|---|---|")
-split = {}
-for p in sorted(glob.glob(os.path.join(OUT, "s4-base", "runs", "*", "metrics.json"))):
-    with open(p) as f:
-        m = json.load(f)
-    dt = 0.1
-    heads = {}
-    with open(os.path.join(os.path.dirname(p), "trajectory.csv")) as f:
-        for row in csv.DictReader(f):
-            if row["state"] == "active":
-                heads.setdefault(int(row["id"]), []).append((int(row["tick"]), float(row["theta"])))
-    for r in m["grouping"]["per_robot"]:
-        if r["t_s"] is None or r["t_nav"] is None:
-            continue
-        start, end = round((r["t_s"] - r["t_nav"]) / dt), round(r["t_s"] / dt)
-        h = heads[r["id"]]
-        g = group_of(r["leader"], SIZES["s4"])
-        split.setdefault(g, []).append((
-            delta_omega([t for k, t in h if k <= end], dt),
-            delta_omega([t for k, t in h if k <= start], dt),
-            delta_omega([t for k, t in h if start <= k <= end], dt),
-        ))
-for g in range(3):
-    cols = [avg([x[i] for x in split.get(g, [])]) for i in range(3)]
-    print(f"| G{g + 1} | " + " | ".join(f"{c:.1f}" if c is not None else "-" for c in cols)
-          + f" | {PAPER['s4'][g][2]} |")
+phase_table("s4", [lambda k, x, s, e: k <= e, lambda k, x, s, e: k <= s,
+                   lambda k, x, s, e: s <= k <= e])
 
 # S3 (base): where groups 2 and 3 turn. Each robot's headings while navigating (from its
 # leader's first formation until it reached the goal), split by its x: before the corridor
@@ -159,27 +159,5 @@ for g in range(3):
 print("\nS31 (base): ΔΩ (deg/s²) per group while navigating, before and in the corridor, 5 seeds\n")
 print("| group | before the corridor | in the corridor | paper (whole run) |")
 print("|---|---|---|---|")
-phases = {}
-for p in sorted(glob.glob(os.path.join(OUT, "s3-base", "runs", "*", "metrics.json"))):
-    with open(p) as f:
-        m = json.load(f)
-    dt = 0.1
-    rows = {}
-    with open(os.path.join(os.path.dirname(p), "trajectory.csv")) as f:
-        for row in csv.DictReader(f):
-            if row["state"] == "active":
-                rows.setdefault(int(row["id"]), []).append(
-                    (int(row["tick"]), float(row["theta"]), float(row["x"])))
-    for r in m["grouping"]["per_robot"]:
-        if r["t_s"] is None or r["t_nav"] is None:
-            continue
-        start, end = round((r["t_s"] - r["t_nav"]) / dt), round(r["t_s"] / dt)
-        nav = [(t, x) for k, t, x in rows[r["id"]] if start <= k <= end]
-        phases.setdefault(group_of(r["leader"], SIZES["s3"]), []).append((
-            delta_omega([t for t, x in nav if x < 21.0], dt),
-            delta_omega([t for t, x in nav if 21.0 <= x <= 41.0], dt),
-        ))
-for g in range(3):
-    cols = [avg([x[i] for x in phases.get(g, [])]) for i in range(2)]
-    print(f"| G{g + 1} | " + " | ".join(f"{c:.1f}" if c is not None else "-" for c in cols)
-          + f" | {PAPER['s3'][g][2]} |")
+phase_table("s3", [lambda k, x, s, e: s <= k <= e and x < 21.0,
+                   lambda k, x, s, e: s <= k <= e and 21.0 <= x <= 41.0])

@@ -15,6 +15,8 @@ import os
 import sys
 from statistics import mean, stdev
 
+from runs import avg, group_of
+
 OUT = sys.argv[1]
 DT = 0.1
 CORRIDOR = (21.0, 41.0)  # configs/grouping_s3.toml: the walls span x = 21-41 m
@@ -53,18 +55,6 @@ def wrap(a):
     return (a + math.pi) % (2 * math.pi) - math.pi
 
 
-def group_of(leader, sizes):
-    end = 0
-    for g, s in enumerate(sizes):
-        end += s
-        if leader < end:
-            return g
-    return len(sizes) - 1
-
-
-def avg(xs):
-    xs = [x for x in xs if x is not None]
-    return mean(xs) if xs else None
 
 
 def fmt(v, d=1):

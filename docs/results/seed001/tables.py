@@ -9,6 +9,8 @@ import os
 import sys
 from statistics import mean
 
+from runs import avg, group_of
+
 OUT = sys.argv[1]
 
 
@@ -26,18 +28,6 @@ def fmt(v, digits=1):
     return f"{v:.{digits}f}"
 
 
-def avg(values):
-    values = [v for v in values if v is not None]
-    return mean(values) if values else None
-
-
-def group_of(leader, sizes):
-    end = 0
-    for g, s in enumerate(sizes):
-        end += s
-        if leader < end:
-            return g
-    return len(sizes) - 1
 
 
 # The paper's rows (Tables II-IV) per group G1, G2, G3: t_s (s), exploration (s, Table II
