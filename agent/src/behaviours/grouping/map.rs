@@ -100,9 +100,10 @@ impl LidarMap {
 
     /// Per cell, the distance in metres to the nearest wall or arena edge, capped at `cap`
     /// (a two-pass chamfer transform with steps 1 and √2).
-    fn clearance(&mut self, cap: f64) -> &[f64] {
+    /// The clearance capped at `cap`, brought up to date: its index in `self.clear`.
+    fn clearance(&mut self, cap: f64) -> usize {
         let k = match self.clear.iter().position(|c| c.0 == cap) {
-            Some(k) if self.clear[k].1 == self.walls_seen => return &self.clear[k].2,
+            Some(k) if self.clear[k].1 == self.walls_seen => return k,
             Some(k) => k,
             None => {
                 self.clear.push((cap, 0, Vec::new()));
@@ -111,7 +112,7 @@ impl LidarMap {
         };
         let d = self.chamfer(cap);
         self.clear[k] = (cap, self.walls_seen, d);
-        &self.clear[k].2
+        k
     }
 
     fn chamfer(&self, cap: f64) -> Vec<f64> {
@@ -157,7 +158,8 @@ impl LidarMap {
     /// The cell centre nearest `p` within `within` metres with `need` metres of clearance,
     /// or `p` when there is none: where a circle of robots fits.
     pub fn roomy(&mut self, p: V2, need: f64, within: f64) -> V2 {
-        let clear = self.clearance(need).to_vec();
+        let k = self.clearance(need);
+        let clear = &self.clear[k].2;
         if self.index(p).is_some_and(|i| clear[i] >= need) {
             return p;
         }
@@ -177,12 +179,24 @@ impl LidarMap {
         best.map_or(p, |(_, j)| self.centre(j))
     }
 
+    /// No wall is within `body` of the straight segment from `a` to `b` (as far as the map
+    /// knows): the way is direct. `need` (at least `body`) names the clearance to read, so a
+    /// robot that also asks for a way with it shares one.
+    pub fn straight(&mut self, a: V2, b: V2, body: f64, need: f64) -> bool {
+        let k = self.clearance(need.max(body));
+        let n = ((b - a).norm() / (self.cell * 0.5)).ceil().max(1.0) as usize;
+        (0..=n).all(|j| {
+            self.index(a + (b - a) * (j as f64 / n as f64))
+                .is_none_or(|i| self.clear[k].2[i] >= body)
+        })
+    }
+
     /// The cheapest path of cell centres from `start` to `goal` for a body that needs `need`
     /// metres from every wall and cannot come closer than `body`: each step costs its length
     /// times 1 + `CROWDED` × the share of `need` it lacks. None when walls close the way.
     pub fn route(&mut self, start: V2, goal: V2, need: f64, body: f64) -> Option<Vec<V2>> {
-        self.clearance(need);
-        let clear = &self.clear.iter().find(|c| c.0 == need).expect("just computed").2;
+        let k = self.clearance(need);
+        let clear = &self.clear[k].2;
         let (s, g) = (self.nearest(start), self.nearest(goal));
         let nx = self.nx as i64;
         let weight = |i: usize| 1.0 + CROWDED * ((need - clear[i]) / need).max(0.0);
@@ -243,21 +257,6 @@ impl LidarMap {
         path.push(start);
         path.reverse();
         Some(path)
-    }
-}
-
-impl LidarMap {
-    /// No wall is within `body` of the straight segment from `a` to `b` (as far as the map
-    /// knows): the way is direct.
-    pub fn straight(&mut self, a: V2, b: V2, body: f64) -> bool {
-        let step = self.cell * 0.5;
-        let n = ((b - a).norm() / step).ceil().max(1.0) as usize;
-        let cap = body + self.cell;
-        let idx: Vec<Option<usize>> = (0..=n)
-            .map(|k| self.index(a + (b - a) * (k as f64 / n as f64)))
-            .collect();
-        let clear = self.clearance(cap);
-        idx.iter().all(|i| i.is_none_or(|i| clear[i] >= body))
     }
 }
 
@@ -356,10 +355,10 @@ mod tests {
     #[test]
     fn a_segment_through_a_wall_is_not_straight() {
         let mut m = walled();
-        assert!(!m.straight(V2::new(8.0, 3.0), V2::new(12.0, 3.0), 0.25));
-        assert!(m.straight(V2::new(8.0, 9.0), V2::new(12.0, 9.0), 0.25));
+        assert!(!m.straight(V2::new(8.0, 3.0), V2::new(12.0, 3.0), 0.25, 0.4));
+        assert!(m.straight(V2::new(8.0, 9.0), V2::new(12.0, 9.0), 0.25, 0.4));
         // Passing 0.1 m over the wall's top is not straight for a body of 0.3 m.
-        assert!(!m.straight(V2::new(8.0, 7.1), V2::new(12.0, 7.1), 0.3));
+        assert!(!m.straight(V2::new(8.0, 7.1), V2::new(12.0, 7.1), 0.3, 0.4));
     }
 
     #[test]

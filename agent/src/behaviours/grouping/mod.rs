@@ -720,11 +720,11 @@ impl Grouping {
             && (obs.tick + self.id as u64).is_multiple_of(WAY_EVERY)
         {
             // A slot behind a wall (the circle turned round its end) is reached round it.
-            let body = self.body + 0.05;
-            self.waypoint = if map.straight(me, slot, body) {
+            let (body, need) = (self.body + 0.05, self.body + WALL_MARGIN);
+            self.waypoint = if map.straight(me, slot, body, need) {
                 None
             } else {
-                map.route(me, slot, self.body + WALL_MARGIN, body)
+                map.route(me, slot, need, body)
                     .filter(|path| length(path) > (slot - me).norm() + DETOUR_SLACK)
                     .map(|path| map::ahead(&path, 1.0))
             };
