@@ -129,6 +129,10 @@ impl Agent {
     fn decode(&mut self, frames: &[Frame]) {
         self.heard.clear();
         self.consensus_inbox.clear();
+        if self.consensus.is_none() && !self.brain.listens() {
+            // Nobody would read them.
+            return;
+        }
         for f in frames {
             if f.dst != BROADCAST && f.dst != self.id {
                 // Not for us (the world routes unicast only to its addressee, but answers

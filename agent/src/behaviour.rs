@@ -134,6 +134,10 @@ pub trait Behaviour: Send + Sized + 'static {
     type Note: Serialize + DeserializeOwned + Debug + Clone + PartialEq + Send + Sync + 'static;
     /// Names of the metrics [`Behaviour::metrics`] computes.
     const METRICS: &'static [&'static str] = &[];
+    /// False when `step` and `react` never read their inbox: the agent then does not decode
+    /// the frames it would throw away (a tenth of a goto robot's turn in a crowd that
+    /// beacons), so frames that do not decode are not counted either.
+    const LISTENS: bool = true;
 
     /// Robot `id`'s behaviour for this scenario.
     fn new(cfg: &Config, params: &Self::Params, id: u32) -> Self;

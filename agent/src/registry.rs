@@ -77,6 +77,9 @@ pub trait Plugin: Sync {
 /// A behaviour driven for one robot, its types erased: the agent hands it the tick's
 /// decoded radio messages and committed decisions, it fills the command and its notes.
 pub trait Brain: Send {
+    /// [`Behaviour::LISTENS`] of the behaviour inside.
+    fn listens(&self) -> bool;
+
     /// One tick; messages of other kinds are ignored. `leadership` is the election as this
     /// robot knows it (Raft scenarios); the behaviour's proposals for the log go to
     /// `proposals`.
@@ -249,6 +252,10 @@ struct Driver<B: Behaviour> {
 }
 
 impl<B: Enveloped> Brain for Driver<B> {
+    fn listens(&self) -> bool {
+        B::LISTENS
+    }
+
     fn step(&mut self, tick: Tick<'_>, cmd: &mut Command, out: &mut Out<'_>) {
         let obs = tick.obs;
         for d in tick.decisions {

@@ -6,10 +6,7 @@ use swarmrt_agent::behaviours::goto::Beacon;
 use swarmrt_protocol::{Frame, MAX_PAYLOAD, Observation, RobotState};
 use swarmrt_scenario::Config;
 
-fn config() -> Config {
-    Config::from_toml_str(
-        "goto.toml",
-        r#"
+const GOTO: &str = r#"
 [scenario]
 name = "goto"
 ticks = 100
@@ -22,10 +19,10 @@ lidar = { rays = 5, fov_deg = 180.0, range = 3.0 }
 [behaviour]
 kind = "goto"
 beacon_period = 4
-"#,
-        &[],
-    )
-    .unwrap()
+"#;
+
+fn config() -> Config {
+    Config::from_toml_str("goto.toml", GOTO, &[]).unwrap()
 }
 
 fn obs_at(x: f64, y: f64, theta: f64, tick: u64) -> Observation {
@@ -70,31 +67,58 @@ fn beacons_every_period_and_stays_silent_otherwise() {
 }
 
 #[test]
-fn a_down_robot_stands_still_and_malformed_frames_are_counted() {
-    let mut a = Agent::new(&config(), 0);
+fn a_down_robot_stands_still_and_malformed_frames_are_counted_by_robots_that_listen() {
+    let frames = |o: &mut Observation| {
+        let mut junk = Frame::EMPTY;
+        junk.len = MAX_PAYLOAD as u16;
+        junk.payload.fill(0x7f);
+        o.inbox[0] = junk;
+        let mut good = Frame::EMPTY;
+        let bytes = postcard_beacon();
+        good.len = bytes.len() as u16;
+        good.payload[..bytes.len()].copy_from_slice(&bytes);
+        good.src = 7;
+        good.sent_tick = 0;
+        o.inbox[1] = good;
+        // Raw bytes between foreign robots: skipped, neither decoded nor counted.
+        o.inbox[2] = Frame::opaque(swarmrt_protocol::BROADCAST, &[0xff, 1, 2]).unwrap();
+        o.inbox_len = 3;
+    };
     let mut o = obs_at(2.0, 2.0, 0.0, 1);
     o.state = RobotState::Down as u8;
-    let mut junk = Frame::EMPTY;
-    junk.len = MAX_PAYLOAD as u16;
-    junk.payload.fill(0x7f);
-    o.inbox[0] = junk;
-    let mut good = Frame::EMPTY;
-    let bytes = postcard_beacon();
-    good.len = bytes.len() as u16;
-    good.payload[..bytes.len()].copy_from_slice(&bytes);
-    good.src = 7;
-    good.sent_tick = 0;
-    o.inbox[1] = good;
-    // Raw bytes between foreign robots: skipped, neither decoded nor counted.
-    o.inbox[2] = Frame::opaque(swarmrt_protocol::BROADCAST, &[0xff, 1, 2]).unwrap();
-    o.inbox_len = 3;
+    frames(&mut o);
+    // Goto steers by its lidar alone: it never reads its inbox, so nothing is decoded.
+    let mut a = Agent::new(&config(), 0);
     let c = a.step(&o);
     assert_eq!((c.v, c.omega, c.outbox_len), (0.0, 0.0, 0));
-    assert_eq!(
-        a.malformed(),
-        1,
-        "the junk frame only: the beacon decodes, the opaque frame is skipped"
-    );
+    assert_eq!(a.malformed(), 0, "goto decodes nothing");
+    // The same frames to a behaviour that listens (flocking), and to goto with consensus.
+    for cfg in [
+        listening("[behaviour]\nkind = \"flocking\""),
+        with_consensus(),
+    ] {
+        let mut a = Agent::new(&cfg, 0);
+        let c = a.step(&o);
+        assert_eq!((c.v, c.omega, c.outbox_len), (0.0, 0.0, 0));
+        assert_eq!(
+            a.malformed(),
+            1,
+            "the junk frame only: the beacon decodes, the opaque frame is skipped"
+        );
+    }
+}
+
+/// [`config`] with its `[behaviour]` table replaced by `behaviour`.
+fn listening(behaviour: &str) -> Config {
+    let text = GOTO.replace("[behaviour]\nkind = \"goto\"\nbeacon_period = 4", behaviour);
+    assert_ne!(text, GOTO, "the behaviour table was replaced");
+    Config::from_toml_str("listening.toml", &text, &[]).unwrap()
+}
+
+/// [`config`] with a Raft election, whose messages travel in the same frames.
+fn with_consensus() -> Config {
+    let text = format!("{GOTO}\n[consensus]\nalgorithm = \"raft\"\n");
+    Config::from_toml_str("consensus.toml", &text, &[]).unwrap()
 }
 
 fn postcard_beacon() -> Vec<u8> {

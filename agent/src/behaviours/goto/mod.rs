@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 use std::sync::{Arc, Mutex};
 
 use serde::{Deserialize, Serialize};
-use swarmrt_protocol::{BROADCAST, Observation};
+use swarmrt_protocol::{BROADCAST, MAX_LIDAR_RAYS, Observation};
 use swarmrt_scenario::layout::nearest_grid_points;
 use swarmrt_scenario::{Config, LidarConfig, wrap_angle};
 
@@ -35,7 +35,9 @@ pub struct Beacon {
 pub struct Goto {
     id: u32,
     params: GotoParams,
-    lidar: LidarConfig,
+    /// `ray_angle(k)` of the scenario's lidar for each of its rays, worked out once: the
+    /// avoidance loop reads one per ray every tick.
+    ray_angles: Vec<f64>,
     radius: f64,
     dt: f64,
     max_speed: f64,
@@ -61,7 +63,7 @@ impl Goto {
         let mut goto = Goto {
             id,
             params: *params,
-            lidar: cfg.robots.lidar.clone(),
+            ray_angles: ray_angles(&cfg.robots.lidar),
             radius: cfg.robots.radius,
             dt: cfg.scenario.dt,
             max_speed: cfg.robots.max_speed,
@@ -134,8 +136,18 @@ fn goal_slots(
     slots
 }
 
+/// The angle of each ray the lidar has (at most [`MAX_LIDAR_RAYS`]), as `ray_angle` gives it.
+fn ray_angles(lidar: &LidarConfig) -> Vec<f64> {
+    (0..(lidar.rays as usize).min(MAX_LIDAR_RAYS))
+        .map(|k| lidar.ray_angle(k))
+        .collect()
+}
+
 impl Behaviour for Goto {
     const KIND: &'static str = "goto";
+    /// Beacons are sent for observers and other robots' programs; goto itself steers by its
+    /// lidar alone.
+    const LISTENS: bool = false;
     type Params = GotoParams;
     type Msg = Beacon;
     type Note = NoNote;
@@ -188,7 +200,9 @@ impl Behaviour for Goto {
         let (mut nearest, mut left, mut right) = (f64::INFINITY, 0.0, 0.0);
         let (mut toward_slot, mut best) = (f64::INFINITY, f64::INFINITY);
         for (k, &d) in obs.lidar().iter().enumerate() {
-            let a = self.lidar.ray_angle(k);
+            let Some(&a) = self.ray_angles.get(k) else {
+                break;
+            };
             if a.abs() <= AHEAD {
                 nearest = nearest.min(d);
             }
