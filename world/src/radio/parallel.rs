@@ -12,11 +12,12 @@
 
 use super::*;
 
-/// Robots from which a send may split over threads. Below, the send is a millisecond or two
-/// and two fork-joins cost more than they save: on a busy machine a spawned thread can wait
-/// milliseconds for a core (1,000 robots: radio 1.1 ms on one thread, 7.5 ms split while
-/// another benchmark ran).
-pub const PARALLEL_SEND_MIN: usize = 4096;
+/// Robots from which a send may split over threads. The two fork-joins run on rayon's pool,
+/// whose threads stay parked between sends: at 1,000 robots the radio stage fell from
+/// ~680 to ~590 us a tick (2 cores, `swarm-bench swarm --in-process-agents 1000`), where
+/// spawning threads per send made it slower (~750 us). At 500 robots the send is a few
+/// hundred microseconds and a fork-join's wake-ups eat what splitting it saves.
+pub const PARALLEL_SEND_MIN: usize = 512;
 /// Most threads a send uses.
 const SEND_THREADS: usize = 4;
 
@@ -232,16 +233,19 @@ impl RadioMedium {
     }
 }
 
-/// `f(0)`, ..., `f(count - 1)` on `count` threads (this one runs `f(0)`), results in order.
+/// `f(0)`, ..., `f(count - 1)` on `count` threads (this one runs `f(0)`, rayon's parked pool
+/// the others), results in order.
 fn on_threads<R: Send>(count: usize, f: impl Fn(usize) -> R + Sync) -> Vec<R> {
-    std::thread::scope(|s| {
-        let f = &f;
-        let others: Vec<_> = (1..count).map(|t| s.spawn(move || f(t))).collect();
-        let mut out = Vec::with_capacity(count);
-        out.push(f(0));
-        for h in others {
-            out.push(h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
+    let mut out: Vec<Option<R>> = (0..count).map(|_| None).collect();
+    let (first, rest) = out.split_first_mut().expect("at least one thread");
+    let f = &f;
+    rayon::in_place_scope(|s| {
+        for (t, slot) in rest.iter_mut().enumerate() {
+            s.spawn(move |_| *slot = Some(f(t + 1)));
         }
-        out
-    })
+        *first = Some(f(0));
+    });
+    out.into_iter()
+        .map(|r| r.expect("every thread ran"))
+        .collect()
 }
