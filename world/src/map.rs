@@ -4,6 +4,8 @@
 //! This is the only module that speaks parry2d/nalgebra types; the rest of the world uses
 //! plain `(f64, f64)` points.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use nalgebra::{Isometry2, Point2, Vector2};
 use parry2d_f64::query::{PointQuery, Ray, RayCast};
 use parry2d_f64::shape::{Compound, ConvexPolygon, SharedShape};
@@ -20,6 +22,84 @@ pub struct Map {
     heights: Vec<f64>,
     /// Whether some obstacle has a finite height (else the 3D clearance is the 2D one).
     any_height: bool,
+    /// Lower bounds of [`Map::clearance`] over the map, for the questions a bound answers.
+    bounds: ClearanceBounds,
+}
+
+/// A lower bound of the clearance per cell of a grid over the map bounds, worked out the first
+/// time a point of the cell is asked about: the clearance at the cell's centre minus half its
+/// diagonal (a distance moves by at most as much as the point does) and a margin far above
+/// rounding. Most robots are far from every obstacle most of the time, so "is it nearer than
+/// r?" is answered without a query of the compound (the kinematics' every sub-step asks).
+struct ClearanceBounds {
+    origin: (f64, f64),
+    cell: f64,
+    cols: usize,
+    rows: usize,
+    /// Per cell, the bound's bits, or [`UNKNOWN`] until asked (threads that race to fill a
+    /// cell store the same value).
+    cells: Vec<AtomicU64>,
+}
+
+/// Bits of a cell of [`ClearanceBounds`] not worked out yet (a NaN no bound can be).
+const UNKNOWN: u64 = u64::MAX;
+/// Side of a bound's cell, unless the map needs larger ones to stay within [`MAX_CELLS`].
+const BOUND_CELL: f64 = 0.5;
+/// Most cells of [`ClearanceBounds`] (8 MB of bounds).
+const MAX_CELLS: f64 = 1_048_576.0;
+/// Metres taken off each bound beyond half the diagonal, for rounding in the clearance, the
+/// cell arithmetic and parry's projections (all far below it at map scales).
+const BOUND_MARGIN: f64 = 1e-6;
+
+impl ClearanceBounds {
+    fn new(cfg: &MapConfig) -> ClearanceBounds {
+        let [x0, y0, x1, y1] = cfg.bounds;
+        let (w, h) = (x1 - x0, y1 - y0);
+        let usable = w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0;
+        if !usable {
+            return ClearanceBounds {
+                origin: (0.0, 0.0),
+                cell: 1.0,
+                cols: 0,
+                rows: 0,
+                cells: Vec::new(),
+            };
+        }
+        let cell = BOUND_CELL.max((w * h / MAX_CELLS).sqrt());
+        let cols = (w / cell).ceil() as usize + 1;
+        let rows = (h / cell).ceil() as usize + 1;
+        ClearanceBounds {
+            origin: (x0, y0),
+            cell,
+            cols,
+            rows,
+            cells: (0..cols * rows).map(|_| AtomicU64::new(UNKNOWN)).collect(),
+        }
+    }
+
+    /// A lower bound of `clearance(p)` (minus infinity outside the grid).
+    fn at(&self, p: (f64, f64), clearance: impl FnOnce((f64, f64)) -> f64) -> f64 {
+        let c = ((p.0 - self.origin.0) / self.cell).floor();
+        let r = ((p.1 - self.origin.1) / self.cell).floor();
+        // Also false for NaN.
+        if !(c >= 0.0 && r >= 0.0 && c < self.cols as f64 && r < self.rows as f64) {
+            return f64::NEG_INFINITY;
+        }
+        let (c, r) = (c as usize, r as usize);
+        let slot = &self.cells[r * self.cols + c];
+        let bits = slot.load(Ordering::Relaxed);
+        if bits != UNKNOWN {
+            return f64::from_bits(bits);
+        }
+        let centre = (
+            self.origin.0 + (c as f64 + 0.5) * self.cell,
+            self.origin.1 + (r as f64 + 0.5) * self.cell,
+        );
+        let half_diagonal = self.cell * std::f64::consts::FRAC_1_SQRT_2;
+        let bound = clearance(centre) - half_diagonal - BOUND_MARGIN;
+        slot.store(bound.to_bits(), Ordering::Relaxed);
+        bound
+    }
 }
 
 /// Why a map could not be built.
@@ -91,6 +171,7 @@ impl Map {
             heights.push(tall(p.height));
         }
         Ok(Map {
+            bounds: ClearanceBounds::new(cfg),
             obstacles: Compound::new(shapes),
             any_height: heights.iter().any(|h| h.is_finite()),
             heights,
@@ -120,6 +201,18 @@ impl Map {
     pub fn clearance(&self, p: (f64, f64)) -> f64 {
         self.obstacles
             .distance_to_point(&Isometry2::identity(), &Point2::new(p.0, p.1), true)
+    }
+
+    /// A lower bound of [`Map::clearance`] at `p`, cheap once its cell was asked about (minus
+    /// infinity outside the map bounds). For a test that only needs to know the clearance is
+    /// above some distance: when the bound is, the clearance is too.
+    pub fn clearance_bound(&self, p: (f64, f64)) -> f64 {
+        self.bounds.at(p, |q| self.clearance(q))
+    }
+
+    /// `clearance(p) < dist`, answered from [`Map::clearance_bound`] when it can be.
+    pub fn nearer_than(&self, p: (f64, f64), dist: f64) -> bool {
+        self.clearance_bound(p) < dist && self.clearance(p) < dist
     }
 
     /// Distance along the ray from `origin` in direction `angle` to the first obstacle, if any
@@ -272,5 +365,45 @@ mod tests {
         assert_eq!(keyless.to_string(), "no room");
         cfg.polygons.clear();
         assert!(Map::build(&cfg).is_ok());
+    }
+    /// The bound never exceeds the clearance, anywhere (near walls, inside obstacles, at cell
+    /// edges, outside the map), so `nearer_than` answers as the clearance does; and it is
+    /// useful: most points of the open map are settled by it.
+    #[test]
+    fn the_clearance_bound_is_below_the_clearance_and_settles_open_space() {
+        let m = map();
+        let mut seed = 3u64;
+        let mut unit = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut settled = 0;
+        let n = 50_000;
+        for k in 0..n {
+            // Some points on cell edges (multiples of the cell), some outside the bounds.
+            let p = if k % 10 == 0 {
+                ((unit() * 24.0).round() * 0.5, (unit() * 24.0).round() * 0.5)
+            } else {
+                (unit() * 14.0 - 1.0, unit() * 14.0 - 1.0)
+            };
+            let (bound, clear) = (m.clearance_bound(p), m.clearance(p));
+            assert!(
+                bound <= clear,
+                "{p:?}: bound {bound} above clearance {clear}"
+            );
+            for dist in [0.15, 0.5, 1.0] {
+                assert_eq!(m.nearer_than(p, dist), clear < dist, "{p:?} {dist}");
+            }
+            // Within the map, a point a cell's diagonal farther than 0.15 m from everything
+            // is settled by the bound alone.
+            let inside = (0.0..10.0).contains(&p.0) && (0.0..10.0).contains(&p.1);
+            if inside && clear >= 0.15 + BOUND_CELL * std::f64::consts::SQRT_2 + 1e-5 {
+                assert!(bound >= 0.15, "{p:?}: clearance {clear}, bound {bound}");
+                settled += 1;
+            }
+        }
+        assert!(settled > n / 5, "only {settled} of {n} in the open");
     }
 }

@@ -46,7 +46,7 @@ impl World {
                 let f = s as f64 / sub as f64;
                 r.x = x0 + dx * f;
                 r.y = y0 + dy * f;
-                if self.map.clearance((r.x, r.y)) < radius {
+                if self.map.nearer_than((r.x, r.y), radius) {
                     r.state = RobotState::Down;
                     break;
                 }

@@ -309,7 +309,7 @@ impl ObserveCtx<'_> {
                 let q = &self.robots[j as usize];
                 Body::new((r.x, r.y), (q.x, q.y), radius, dc)
             }));
-            let mut clearance = None;
+            let (mut clearance, mut clear_bound) = (None, None);
             for k in 0..rays {
                 let angle = r.theta + self.ray_angles[k];
                 let dir = (angle.cos(), angle.sin());
@@ -327,9 +327,13 @@ impl ObserveCtx<'_> {
                 }
                 // A map hit is at least the robot's clearance away (up to rounding far below
                 // the margin), so a ray already stopped nearer cannot find one: the cast
-                // would say None. In a crowd most rays end on a neighbour.
-                let clear = *clearance.get_or_insert_with(|| self.map.clearance((r.x, r.y)));
-                if d + LIDAR_SKIP_MARGIN >= clear
+                // would say None. In a crowd most rays end on a neighbour. The cached bound of
+                // the clearance settles most rays without asking the map at all.
+                let bound =
+                    *clear_bound.get_or_insert_with(|| self.map.clearance_bound((r.x, r.y)));
+                if d + LIDAR_SKIP_MARGIN >= bound
+                    && d + LIDAR_SKIP_MARGIN
+                        >= *clearance.get_or_insert_with(|| self.map.clearance((r.x, r.y)))
                     && let Some(t) = self.map.cast_dir((r.x, r.y), dir, d)
                 {
                     d = d.min(t);
