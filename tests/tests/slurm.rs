@@ -397,6 +397,13 @@ fn a_task_killed_outright_is_a_failed_row_naming_its_task() {
     ];
     assert_ok(&swarm_on(&lab, &args));
     let id = wait_running(&lab, &out, 0);
+    // Kill a run that ticks, which is what this is about: a kill while the task was still
+    // spawning the run's processes once left the run ending in order instead (CI under load:
+    // "the world process failed before the run started (killed by signal 15)").
+    let trajectory = out.join("runs/radio.loss=0_s1/trajectory.csv");
+    wait_until("the run to tick", LIMIT, || {
+        std::fs::metadata(&trajectory).is_ok_and(|m| m.len() > 0)
+    });
     // SIGKILL to every process of the task: the run cannot stop in order, and its row still
     // names the task.
     let kill = lab
