@@ -45,7 +45,7 @@ struct ClearanceBounds {
 const UNKNOWN: u64 = u64::MAX;
 /// Side of a bound's cell, unless the map needs larger ones to stay within [`MAX_CELLS`].
 const BOUND_CELL: f64 = 0.5;
-/// Most cells of [`ClearanceBounds`] (8 MB of bounds).
+/// Most cells of [`ClearanceBounds`] by area (8 MB of bounds); a side has at most ~1,024.
 const MAX_CELLS: f64 = 1_048_576.0;
 /// Metres taken off each bound beyond half the diagonal, for rounding in the clearance, the
 /// cell arithmetic and parry's projections (all far below it at map scales).
@@ -65,7 +65,10 @@ impl ClearanceBounds {
                 cells: Vec::new(),
             };
         }
-        let cell = BOUND_CELL.max((w * h / MAX_CELLS).sqrt());
+        // At most ~1,024 cells a side too, so a long thin map stays within the budget.
+        let cell = BOUND_CELL
+            .max((w * h / MAX_CELLS).sqrt())
+            .max(w.max(h) / 1024.0);
         let cols = (w / cell).ceil() as usize + 1;
         let rows = (h / cell).ceil() as usize + 1;
         ClearanceBounds {
@@ -405,5 +408,27 @@ mod tests {
             }
         }
         assert!(settled > n / 5, "only {settled} of {n} in the open");
+    }
+    /// However long or large the map, the bounds stay within their budget of cells.
+    #[test]
+    fn the_bounds_grid_stays_small_for_long_or_huge_maps() {
+        for bounds in [
+            [0.0, 0.0, 1e9, 1.0],
+            [0.0, 0.0, 1e6, 1e6],
+            [0.0, 0.0, 3.0, 2.0],
+        ] {
+            let cfg = MapConfig {
+                bounds,
+                ..empty_map()
+            };
+            let b = ClearanceBounds::new(&cfg);
+            assert!(
+                b.cols * b.rows <= 1_100_000,
+                "{bounds:?}: {} x {}",
+                b.cols,
+                b.rows
+            );
+            assert!(b.cols * b.rows > 0, "{bounds:?}");
+        }
     }
 }
