@@ -7,6 +7,7 @@ pub mod c_robot;
 pub mod lab;
 pub mod python;
 pub mod slurm;
+pub mod stranger;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
