@@ -13,6 +13,8 @@ use crate::behaviour::BehaviourSection;
 use crate::consensus::ConsensusConfig;
 use crate::error::{ConfigError, one_line};
 use crate::faults::FaultsConfig;
+use crate::input::{read_bounded, too_big};
+use crate::limits::MAX_CONFIG_BYTES;
 use crate::overrides::apply_override;
 
 /// A whole scenario.
@@ -226,7 +228,11 @@ pub struct RobotsConfig {
     pub aerial: Option<AerialConfig>,
     /// The command line every robot runs instead of the built-in `swarm-agent` (its
     /// arguments are appended): a controller in any language (docs/robot-interface.md).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "crate::program::command_line"
+    )]
     pub program: Vec<String>,
     /// Programs for one robot or a range of them; later entries win
     /// (`program = ["swarm-agent"]` puts the built-in robot back).
@@ -562,20 +568,40 @@ pub const MAX_ROBOTS: u32 = 100_000;
 
 impl Config {
     /// Reads `path`, applies `overrides` (`key=value`) and validates. `[behaviour]` stays
-    /// opaque: resolve it with the behaviour registry (`swarmrt_agent::registry`).
+    /// opaque: resolve it with the behaviour registry (`swarmrt_agent::registry`). This is
+    /// the one read of a config every command and process shares, so its bounds are here: a
+    /// regular file (opened without blocking, so a FIFO or a device is refused at once) of at
+    /// most [`MAX_CONFIG_BYTES`] bytes.
     pub fn load(path: &Path, overrides: &[String]) -> Result<Config, ConfigError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| ConfigError::new(&file, "", format!("cannot read: {e}")))?;
+        let text = read_bounded(path, MAX_CONFIG_BYTES)
+            .map_err(|message| ConfigError::new(&file, "", message))?;
         Self::from_toml_str(&file, &text, overrides)
     }
 
-    /// Parses `text` (named `file` in errors), applies `overrides` and validates.
+    /// Parses `text` (named `file` in errors), applies `overrides` and validates. The text
+    /// and each override are at most [`MAX_CONFIG_BYTES`] bytes, as a file is.
     pub fn from_toml_str(
         file: &str,
         text: &str,
         overrides: &[String],
     ) -> Result<Config, ConfigError> {
+        if text.len() as u64 > MAX_CONFIG_BYTES {
+            let got = format!("{} bytes", text.len());
+            return Err(ConfigError::new(file, "", too_big(MAX_CONFIG_BYTES, &got)));
+        }
+        if let Some(ov) = overrides
+            .iter()
+            .find(|ov| ov.len() as u64 > MAX_CONFIG_BYTES)
+        {
+            let key = ov.split_once('=').map_or("", |(k, _)| k).trim();
+            let got = format!("{} bytes", ov.len());
+            return Err(ConfigError::new(
+                "--set",
+                key,
+                too_big(MAX_CONFIG_BYTES, &got),
+            ));
+        }
         let mut table: toml::Table = toml::from_str(text).map_err(|e| {
             ConfigError::new(
                 file,

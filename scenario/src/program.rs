@@ -7,13 +7,32 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::config::Config;
 use crate::error::{ConfigError, KeyError};
+use crate::limits::{MAX_ARG_BYTES, MAX_ARGS, MAX_PROGRAMS};
 
 /// The name that means the built-in Rust robot, in `program[0]`.
 pub const BUILTIN: &str = "swarm-agent";
+
+/// What a command line must be, for errors.
+const COMMAND_LINE: &str =
+    "a command line like [\"python3\", \"robot.py\"] whose first word is a program";
+
+/// `robots.program` as written: a command line, never `[]`. Left out, the robots run the
+/// built-in `swarm-agent`; an empty list would mean the same silently, so it is refused as
+/// the reference says, with the two ways to ask for the built-in robot.
+pub fn command_line<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<String>, D::Error> {
+    let argv = Vec::<String>::deserialize(d)?;
+    if argv.is_empty() {
+        return Err(serde::de::Error::custom(format!(
+            "expected {COMMAND_LINE}, got [] (for the built-in robot leave the key out or \
+             write [\"{BUILTIN}\"])"
+        )));
+    }
+    Ok(argv)
+}
 
 /// One `[[robots.programs]]` entry: a program for some robots.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -79,20 +98,54 @@ pub fn any_foreign(cfg: &Config) -> bool {
     (0..cfg.robots.count).any(|id| program_of(cfg, id).is_some())
 }
 
-/// The shape checks (no file system): non-empty command lines, ranges inside `robots.count`.
+/// The shape checks (no file system): non-empty command lines of at most [`MAX_ARGS`] words
+/// of at most [`MAX_ARG_BYTES`] bytes without a NUL (which no program can be given), at most
+/// [`MAX_PROGRAMS`] entries, ranges inside `robots.count`.
 pub fn validate(cfg: &Config) -> Result<(), KeyError> {
     let r = &cfg.robots;
     let nonempty = |key: &str, argv: &[String]| -> Result<(), KeyError> {
         if argv.first().is_none_or(|p| p.is_empty()) {
+            return Err((key.to_string(), format!("expected {COMMAND_LINE}")));
+        }
+        if argv.len() > MAX_ARGS {
             return Err((
                 key.to_string(),
-                "expected a command line like [\"python3\", \"robot.py\"] whose first word is a program".to_string(),
+                format!(
+                    "expected {COMMAND_LINE}, of at most {MAX_ARGS} words, got {}",
+                    argv.len()
+                ),
             ));
+        }
+        for (i, word) in argv.iter().enumerate() {
+            if word.len() > MAX_ARG_BYTES || word.contains('\0') {
+                return Err((
+                    format!("{key}[{i}]"),
+                    format!(
+                        "expected a word of at most {MAX_ARG_BYTES} bytes without a NUL \
+                         character, got {} bytes{}",
+                        word.len(),
+                        if word.contains('\0') {
+                            " with a NUL"
+                        } else {
+                            ""
+                        }
+                    ),
+                ));
+            }
         }
         Ok(())
     };
     if !r.program.is_empty() {
         nonempty("robots.program", &r.program)?;
+    }
+    if r.programs.len() > MAX_PROGRAMS {
+        return Err((
+            "robots.programs".to_string(),
+            format!(
+                "expected at most {MAX_PROGRAMS} entries, got {}",
+                r.programs.len()
+            ),
+        ));
     }
     for (i, p) in r.programs.iter().enumerate() {
         nonempty(&format!("robots.programs[{i}].program"), &p.program)?;
@@ -202,8 +255,13 @@ mod tests {
     fn bad_entries_name_their_key() {
         let e = cfg("programs = [{ robots = \"4..9\", program = [\"x\"] }]").unwrap_err();
         assert_eq!(e.key, "robots.programs[0].robots");
-        let e = cfg("program = []\nprograms = [{ robots = 1, program = [] }]").unwrap_err();
+        let e = cfg("programs = [{ robots = 1, program = [] }]").unwrap_err();
         assert_eq!(e.key, "robots.programs[0].program");
+        let e = cfg("program = []").unwrap_err();
+        assert_eq!(e.key, "robots.program");
+        assert!(e.message.contains("got []"), "{e}");
+        let e = cfg("program = [\"x\", \"a\\u0000b\"]").unwrap_err();
+        assert_eq!(e.key, "robots.program[1]");
         let e = cfg("programs = [{ robots = \"a..b\", program = [\"x\"] }]").unwrap_err();
         assert!(e.message.contains("range"), "{e}");
     }

@@ -18,6 +18,7 @@ use std::fmt::Write as _;
 use crate::config::{Config, MAX_COORD, MAX_ROBOTS};
 use crate::error::{KeyError, one_line};
 use crate::faults::MAX_RESTARTS;
+use crate::limits::{MAX_CONFIG_BYTES, MAX_OBSTACLES, MAX_PROGRAMS};
 use crate::validate::{range_f, range_u64};
 use swarmrt_protocol::{MAX_LIDAR_RAYS, MAX_OUTBOX};
 
@@ -177,7 +178,7 @@ const TO_CEILING: Bounds = Bounds::Range(Lim::V(0.0), Lim::Of("map.height"));
 #[rustfmt::skip]
 pub const KEYS: &[Key] = &[
     // [scenario]
-    k("scenario.name", Bounds::Rule("non-empty; letters, digits, `_` or `-`"), "", "Scenario name, used in the run directory name."),
+    k("scenario.name", Bounds::Rule("non-empty, at most 64 bytes; letters, digits, `_` or `-`"), "", "Scenario name, used in the run directory name."),
     k("scenario.seed", Bounds::Any, "", "The run seed: every random draw derives from it."),
     k("scenario.ticks", r(1.0, 100_000_000.0), "ticks", "Ticks to run at most."),
     k("scenario.dt", r(1e-4, 10.0), "s", "Seconds per tick."),
@@ -202,16 +203,16 @@ pub const KEYS: &[Key] = &[
     k("map.rectangles[i].x_max", COORD, "m", "Right edge.").also("> x_min"),
     k("map.rectangles[i].y_max", COORD, "m", "Top edge.").also("> y_min"),
     k("map.rectangles[i].height", r(1e-3, 1e6), "m", "Height from the ground (unset: a wall of any height)."),
-    k("map.polygons[i].points", COORD, "m", "Vertices `[x, y]` of a convex polygon, either winding.").also("at least 3 points"),
+    k("map.polygons[i].points", COORD, "m", "Vertices `[x, y]` of a convex polygon, either winding.").also("3 to 256 points, not all on one line, whose convex hull has at least 1e-6 m²"),
     k("map.polygons[i].height", r(1e-3, 1e6), "m", "Height from the ground (unset: a wall of any height)."),
     // [robots]
     k("robots.count", r(1.0, MAX_ROBOTS as f64), "", "Number of robots, one process each."),
     k("robots.radius", r(1e-3, 100.0), "m", "Body radius."),
     k("robots.max_speed", r(0.0, 1000.0), "m/s", "Forward (aerial: horizontal) speed limit."),
     k("robots.max_turn_rate", r(0.0, 1000.0), "rad/s", "Turn-rate limit."),
-    k("robots.program", Bounds::Rule("a command line whose first word is a program"), "", "Command line every robot runs instead of `swarm-agent` (docs/robot-interface.md).").ty("array of string").absent("[]"),
+    k("robots.program", Bounds::Rule("a command line whose first word is a program: 1 to 256 words of at most 4096 bytes, no NUL"), "", "Command line every robot runs instead of `swarm-agent` (unset: `swarm-agent`; docs/robot-interface.md).").ty("array of string"),
     k("robots.programs[i].robots", Bounds::Rule("ids below `robots.count`"), "", "One robot id, or a range `\"a..b\"` (end excluded).").ty("integer or string"),
-    k("robots.programs[i].program", Bounds::Rule("a command line whose first word is a program"), "", "Command line of these robots; later entries win, `[\"swarm-agent\"]` is the built-in robot."),
+    k("robots.programs[i].program", Bounds::Rule("a command line whose first word is a program: 1 to 256 words of at most 4096 bytes, no NUL"), "", "Command line of these robots; later entries win, `[\"swarm-agent\"]` is the built-in robot."),
     k("robots.start.x", COORD, "m", "Centre x of the grid of start positions.").also("not with `groups` or `path`"),
     k("robots.start.y", COORD, "m", "Centre y of the grid.").also("not with `groups` or `path`"),
     k("robots.start.spacing", Bounds::Range(Lim::Of("2 * robots.radius"), Lim::V(1e6)), "m", "Distance between neighbouring start positions.").also("above the lower end"),
@@ -297,11 +298,11 @@ pub fn sections() -> Vec<(&'static str, String)> {
         ("scenario", "Name, length, time step and seed. Required.".to_string()),
         ("map", "The arena; its bounds are walls. Required.".to_string()),
         ("map.goal", "The disc robots try to reach. Required.".to_string()),
-        ("map.circles[i]", "Circular obstacles, any number.".to_string()),
-        ("map.rectangles[i]", "Axis-aligned rectangular obstacles, any number.".to_string()),
-        ("map.polygons[i]", "Convex polygon obstacles, any number.".to_string()),
+        ("map.circles[i]", format!("Circular obstacles, at most {MAX_OBSTACLES}.")),
+        ("map.rectangles[i]", format!("Axis-aligned rectangular obstacles, at most {MAX_OBSTACLES}.")),
+        ("map.polygons[i]", format!("Convex polygon obstacles, at most {MAX_OBSTACLES}.")),
         ("robots", "Robot body and limits. Required.".to_string()),
-        ("robots.programs[i]", "Programs for one robot or a range of them; later entries win (docs/robot-interface.md).".to_string()),
+        ("robots.programs[i]", format!("Programs for one robot or a range of them, at most {MAX_PROGRAMS} entries; later entries win (docs/robot-interface.md).")),
         ("robots.start", "Where robots start: one grid around `x, y` derived from `robots.count`, one grid per group, a random scatter, or a chain along a path.".to_string()),
         ("robots.start.groups[i]", "Start groups: robots split by id into contiguous blocks (flocks, teams), one grid each; not with `robots.start.x/y`.".to_string()),
         ("robots.lidar", "The range finder: rays evenly over a field of view, or at explicit angles.".to_string()),
@@ -726,7 +727,7 @@ pub struct BehaviourDoc {
 /// `docs/config.md`: the core schema, then each behaviour's parameters.
 pub fn render(core: &Schema, behaviours: &[BehaviourDoc]) -> String {
     let mut out = String::new();
-    out.push_str(
+    out.push_str(&format!(
         "# Config reference\n\n\
          <!-- Generated by swarmrt_scenario::reference; do not edit. Regenerate with\n\
          SWARMRT_UPDATE_DOCS=1 cargo test -p swarmrt-agent --test config_reference -->\n\n\
@@ -734,12 +735,16 @@ pub fn render(core: &Schema, behaviours: &[BehaviourDoc]) -> String {
          errors, and every value is checked against the bounds below before any process starts;\n\
          the error names the file, the key and the bounds. `--set key=value` overrides any key.\n\
          `swarm check <config>` prints the resolved config, every default filled in.\n\n\
+         A config is a regular file of UTF-8 text of at most {max} bytes (1 MiB), and so is\n\
+         each `--set` argument; a FIFO, a device or a directory is refused before a byte is\n\
+         read. Lists are bounded too (obstacles, vertices, command lines: see their rows).\n\n\
          Keys are dotted paths; `[i]` is any element of an array of tables. *default*: the value\n\
          used when the key is not written (*unset*: no value, what it means is in the meaning;\n\
          *required*: must be written). *bounds*: ends included; a bound in `code` depends on\n\
          other keys.\n\n\
          ## Sections\n\n",
-    );
+        max = MAX_CONFIG_BYTES
+    ));
     let sections = sections();
     render_schema(&mut out, core, &sections, true);
     out.push_str(

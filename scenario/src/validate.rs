@@ -4,6 +4,8 @@
 
 use crate::config::Config;
 use crate::error::KeyError;
+use crate::hull::hull_shape;
+use crate::limits::{MAX_NAME_BYTES, MAX_OBSTACLES, MAX_POLYGON_POINTS, MIN_POLYGON_AREA};
 use crate::reference::{KEYS, check_f, check_u, hi, lo};
 
 /// `v` within the bounds the config reference gives `key` (indices allowed).
@@ -27,6 +29,14 @@ impl Config {
     pub fn validate(&self) -> Result<(), KeyError> {
         let s = &self.scenario;
         check(!s.name.is_empty(), "scenario.name", "a non-empty name")?;
+        check(
+            s.name.len() <= MAX_NAME_BYTES,
+            "scenario.name",
+            &format!(
+                "a name of at most {MAX_NAME_BYTES} bytes (it becomes a directory name), got {} bytes",
+                s.name.len()
+            ),
+        )?;
         check(
             s.name
                 .chars()
@@ -62,6 +72,17 @@ impl Config {
             "map.goal",
             "a goal inside map.bounds",
         )?;
+        for (kind, n) in [
+            ("circles", m.circles.len()),
+            ("rectangles", m.rectangles.len()),
+            ("polygons", m.polygons.len()),
+        ] {
+            check(
+                n <= MAX_OBSTACLES,
+                &format!("map.{kind}"),
+                &format!("at most {MAX_OBSTACLES} {kind}, got {n}"),
+            )?;
+        }
         // Obstacles stay within MAX_COORD like the bounds: a rectangle from -1e308 to 1e308
         // is finite, but its width is not, and the map's BVH panics on it.
         for (i, c) in m.circles.iter().enumerate() {
@@ -85,17 +106,21 @@ impl Config {
             )?;
         }
         for (i, p) in m.polygons.iter().enumerate() {
+            let key = format!("map.polygons[{i}].points");
             check(
-                p.points.len() >= 3,
-                &format!("map.polygons[{i}].points"),
-                "at least 3 points",
+                (3..=MAX_POLYGON_POINTS).contains(&p.points.len()),
+                &key,
+                &format!(
+                    "3 to {MAX_POLYGON_POINTS} points [x, y], got {}",
+                    p.points.len()
+                ),
             )?;
             for (j, pt) in p.points.iter().enumerate() {
                 for (k, v) in pt.iter().enumerate() {
-                    let key = format!("map.polygons[{i}].points[{j}][{k}]");
-                    f(&key, *v)?;
+                    f(&format!("{key}[{j}][{k}]"), *v)?;
                 }
             }
+            polygon_area(&key, &p.points)?;
         }
 
         let r = &self.robots;
@@ -358,6 +383,33 @@ impl Config {
         let b = &self.map.bounds;
         x - margin > b[0] && x + margin < b[2] && y - margin > b[1] && y + margin < b[3]
     }
+}
+
+/// The polygon at `key` has at least 3 distinct points, not all on one line, whose convex
+/// hull (the obstacle the world builds) has at least [`MIN_POLYGON_AREA`] m².
+fn polygon_area(key: &str, points: &[[f64; 2]]) -> Result<(), KeyError> {
+    let hull = hull_shape(points);
+    let got = if hull.distinct < 3 {
+        format!(
+            "{} distinct of its {} points (the others repeat them)",
+            hull.distinct,
+            points.len()
+        )
+    } else if hull.vertices < 3 {
+        format!("its {} distinct points on one line", hull.distinct)
+    } else if hull.area < MIN_POLYGON_AREA {
+        format!("an area of {} m²", short(hull.area))
+    } else {
+        return Ok(());
+    };
+    Err((
+        key.to_string(),
+        format!(
+            "expected a polygon of at least 3 distinct points, not all on one line, whose \
+             convex hull has an area of at least {} m², got {got}",
+            short(MIN_POLYGON_AREA)
+        ),
+    ))
 }
 
 /// `Ok` when `ok`, else an error at `key` saying what was `expected`.
