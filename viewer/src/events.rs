@@ -4,13 +4,14 @@
 //! Events are read through the typed record schema (`records::Event`); a line that does not
 //! parse is counted, never guessed at.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::Serialize;
 use serde_json::Value;
 use swarmrt_protocol::records::{Event, FaultKind};
 
 use crate::overlay::{LaneChange, Overlay};
+use crate::tail::Tail;
 
 /// One mark on the timeline.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -46,8 +47,7 @@ pub struct LanePoint {
 
 /// Everything read from `events.jsonl` so far.
 pub struct EventsModel {
-    path: PathBuf,
-    scanned: u64,
+    tail: Tail,
     overlay: Box<dyn Overlay>,
     /// The timeline, in record order (ticks ascending).
     pub markers: Vec<Marker>,
@@ -75,8 +75,7 @@ impl EventsModel {
             })
             .collect();
         EventsModel {
-            path: path.to_path_buf(),
-            scanned: 0,
+            tail: Tail::new(path),
             overlay,
             markers: Vec::new(),
             notes: vec![Vec::new(); robots],
@@ -87,6 +86,11 @@ impl EventsModel {
         }
     }
 
+    /// Lines longer than [`crate::tail::MAX_LINE`], skipped.
+    pub fn long_lines(&self) -> u64 {
+        self.tail.long_lines()
+    }
+
     /// The behaviour's overlay.
     pub fn overlay(&self) -> &dyn Overlay {
         self.overlay.as_ref()
@@ -94,16 +98,15 @@ impl EventsModel {
 
     /// Reads the whole lines appended since the last call.
     pub fn refresh(&mut self) -> std::io::Result<()> {
-        let path = self.path.clone();
-        self.scanned =
-            crate::tail::lines_from(
-                &path,
-                self.scanned,
-                |line, _, _| match serde_json::from_slice::<Event<Value>>(line) {
-                    Ok(e) => self.add(e, line),
-                    Err(_) => self.bad_lines += 1,
-                },
-            )?;
+        let mut tail = std::mem::take(&mut self.tail);
+        let read = tail.read_new(
+            |line, _, _| match serde_json::from_slice::<Event<Value>>(line) {
+                Ok(e) => self.add(e, line),
+                Err(_) => self.bad_lines += 1,
+            },
+        );
+        self.tail = tail;
+        read?;
         Ok(())
     }
 

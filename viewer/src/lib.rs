@@ -10,7 +10,12 @@
 //! - `overlay.rs` and `agent_overlay.rs`: what a behaviour's notes mean (roles, headlines,
 //!   consensus lanes), answered by the behaviour's own folder;
 //! - `server.rs`: the HTTP routes; `assets/` the page (plain HTML, CSS and JavaScript,
-//!   embedded in the binary: building needs no JavaScript toolchain).
+//!   embedded in the binary: building needs no JavaScript toolchain);
+//! - `access.rs`: who may ask (the `Host` must name the viewer, no other origin, a token
+//!   beyond loopback); `conns.rs`: connections accepted within bounds (how many, how long a
+//!   header may take);
+//! - `files.rs` and `tail.rs`: a run directory's files opened without following a FIFO, a
+//!   device or a link, and read once each, holding at most a bounded piece of a line.
 //!
 //! ```no_run
 //! let viewer = swarmrt_viewer::Viewer::start(
@@ -22,9 +27,12 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod access;
 mod agent_overlay;
 mod assets;
+pub mod conns;
 pub mod events;
+pub mod files;
 pub mod overlay;
 pub mod radio;
 pub mod run;
@@ -76,6 +84,7 @@ impl Default for Listen {
 /// A running viewer: its server lives on its own thread until [`Viewer::stop`] or drop.
 pub struct Viewer {
     url: String,
+    token: Option<String>,
     stop: Option<tokio::sync::oneshot::Sender<()>>,
     thread: Option<std::thread::JoinHandle<()>>,
 }
@@ -100,15 +109,22 @@ impl Viewer {
         Ok(socket)
     }
 
-    /// Serves the run in `dir` on a socket from [`Viewer::bind`].
+    /// Serves the run in `dir` on a socket from [`Viewer::bind`]. Beyond loopback every
+    /// request must carry a fresh random token, which [`Viewer::url`] includes.
     pub fn serve(dir: &Path, socket: std::net::TcpListener) -> Result<Viewer, ViewError> {
         let run = run::Run::open(dir)?;
         let bound = socket.local_addr().map_err(ViewError::Start)?;
-        let host = match bound.ip() {
-            IpAddr::V6(ip) => format!("[{ip}]"),
-            ip => ip.to_string(),
+        let token = if bound.ip().is_loopback() {
+            None
+        } else {
+            Some(access::new_token().map_err(ViewError::Start)?)
         };
-        let url = format!("http://{host}:{}/", bound.port());
+        let name = access::host_name();
+        let access = std::sync::Arc::new(access::Access::new(bound, name.clone(), token.clone()));
+        let mut url = format!("http://{}:{}/", shown_host(bound.ip(), name), bound.port());
+        if let Some(t) = &token {
+            url.push_str(&format!("?token={t}"));
+        }
         let runtime = tokio::runtime::Builder::new_multi_thread()
             .worker_threads(2)
             .thread_name("viewer")
@@ -123,20 +139,9 @@ impl Viewer {
                     let shared = server::shared(run);
                     tokio::spawn(server::refresher(shared.clone()));
                     let app = server::router(shared);
-                    let listener = match tokio::net::TcpListener::from_std(socket) {
-                        Ok(l) => l,
-                        Err(e) => {
-                            tracing::error!("viewer: {e}");
-                            return;
-                        }
-                    };
-                    tokio::select! {
-                        r = axum::serve(listener, app) => {
-                            if let Err(e) = r {
-                                tracing::error!("viewer: {e}");
-                            }
-                        }
-                        _ = stopped => {}
+                    match tokio::net::TcpListener::from_std(socket) {
+                        Ok(listener) => conns::serve(listener, access, app, stopped).await,
+                        Err(e) => tracing::error!("viewer: {e}"),
                     }
                 });
                 // Live streams never end on their own: do not wait for them.
@@ -145,14 +150,20 @@ impl Viewer {
             .map_err(ViewError::Start)?;
         Ok(Viewer {
             url,
+            token,
             stop: Some(stop),
             thread: Some(thread),
         })
     }
 
-    /// The page's address.
+    /// The page's address (with its token, beyond loopback).
     pub fn url(&self) -> &str {
         &self.url
+    }
+
+    /// The token every request must carry, when the viewer listens beyond loopback.
+    pub fn token(&self) -> Option<&str> {
+        self.token.as_deref()
     }
 
     /// Stops the server and waits for its thread.
@@ -168,6 +179,37 @@ impl Viewer {
             let _ = t.join();
         }
     }
+}
+
+/// The host to print in the page's URL: the address itself, or for an unspecified one
+/// (0.0.0.0, ::) the address this host reaches the network from, else its name.
+fn shown_host(ip: IpAddr, name: Option<String>) -> String {
+    let literal = |ip: IpAddr| match ip {
+        IpAddr::V6(v6) => format!("[{v6}]"),
+        ip => ip.to_string(),
+    };
+    if !ip.is_unspecified() {
+        return literal(ip);
+    }
+    // Connecting a UDP socket sends nothing: it only asks the routing table which local
+    // address would reach a (documentation-range) address beyond this host.
+    let routed = |bind: &str, to: &str| {
+        let s = std::net::UdpSocket::bind(bind).ok()?;
+        s.connect(to).ok()?;
+        s.local_addr()
+            .ok()
+            .map(|a| a.ip())
+            .filter(|ip| !ip.is_unspecified())
+    };
+    routed("0.0.0.0:0", "192.0.2.1:9")
+        .or_else(|| {
+            ip.is_ipv6()
+                .then(|| routed("[::]:0", "[2001:db8::1]:9"))
+                .flatten()
+        })
+        .map(literal)
+        .or(name)
+        .unwrap_or_else(|| "localhost".to_string())
 }
 
 impl Drop for Viewer {

@@ -2,9 +2,11 @@
 //! how many copies were delivered and dropped, and the copies themselves packed for the page
 //! (who to whom, and what became of it).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::Serialize;
+
+use crate::tail::Tail;
 
 /// First four bytes of a radio response ("SWVR").
 pub const RADIO_MAGIC: u32 = u32::from_le_bytes(*b"SWVR");
@@ -52,9 +54,8 @@ pub struct Strip {
 /// The ticks of a `radio.csv` read so far.
 #[derive(Debug)]
 pub struct RadioIndex {
-    path: PathBuf,
+    tail: Tail,
     cols: Option<Columns>,
-    scanned: u64,
     /// First byte of each tick's lines, and the byte after the last line read.
     starts: Vec<u64>,
     end: u64,
@@ -67,9 +68,8 @@ impl RadioIndex {
     /// An index of `path`; nothing is read until [`Self::refresh`].
     pub fn new(path: &Path) -> RadioIndex {
         RadioIndex {
-            path: path.to_path_buf(),
+            tail: Tail::new(path),
             cols: None,
-            scanned: 0,
             starts: Vec::new(),
             end: 0,
             strip: Strip::default(),
@@ -94,11 +94,16 @@ impl RadioIndex {
 
     /// Reads the whole lines appended since the last call.
     pub fn refresh(&mut self) -> std::io::Result<()> {
-        let path = self.path.clone();
-        self.scanned = crate::tail::lines_from(&path, self.scanned, |line, offset, next| {
-            self.line(&String::from_utf8_lossy(line), offset, next)
-        })?;
-        Ok(())
+        let mut tail = std::mem::take(&mut self.tail);
+        let read = tail
+            .read_new(|line, offset, next| self.line(&String::from_utf8_lossy(line), offset, next));
+        self.tail = tail;
+        read
+    }
+
+    /// Lines longer than [`crate::tail::MAX_LINE`], skipped.
+    pub fn long_lines(&self) -> u64 {
+        self.tail.long_lines()
     }
 
     /// True once the file's header was read (the run records its radio).
@@ -177,32 +182,32 @@ impl RadioIndex {
         } else {
             self.end
         };
-        let buf = crate::tail::read_range(&self.path, start, end)?;
         let mut k = 0usize;
-        for line in String::from_utf8_lossy(&buf).lines() {
+        crate::tail::lines_in(self.tail.path(), start, end, |line| {
+            let line = String::from_utf8_lossy(line);
             let f: Vec<&str> = line.split(',').collect();
             let Some(tick) = f
                 .get(cols.tick)
                 .and_then(|t| t.parse::<u64>().ok())
                 .filter(|_| f.len() == cols.count)
             else {
-                continue;
+                return;
             };
             while k < ticks.len() && ticks[k] < tick {
                 k += 1;
             }
             if k == ticks.len() || ticks[k] != tick {
-                continue;
+                return;
             }
             // A copy with no receiver (a broadcast dropped for capacity before fan-out) is
             // counted in the strip but has no link to draw.
             let (Ok(src), Ok(dst)) = (f[cols.from].parse::<u32>(), f[cols.to].parse::<u32>())
             else {
-                continue;
+                return;
             };
             counts[k] += 1;
             copies.push([src, dst, outcome_code(f[cols.outcome])]);
-        }
+        })?;
         for (tick, n) in ticks.iter().zip(&counts) {
             out.extend_from_slice(&(*tick as u32).to_le_bytes());
             out.extend_from_slice(&n.to_le_bytes());

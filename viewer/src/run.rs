@@ -22,7 +22,7 @@ const CHUNK_BYTES: usize = 1 << 20;
 pub struct Meta {
     /// Scenario name.
     pub name: String,
-    /// The run directory.
+    /// The run directory's name (never its absolute path: the page has no use for it).
     pub dir: String,
     /// Seconds per tick.
     pub dt: f64,
@@ -85,7 +85,13 @@ pub struct Run {
     pub events: EventsModel,
     /// `radio.csv` (empty unless the run records it).
     pub radio: RadioIndex,
+    /// Why the last refresh could not read a record (shown above the map).
+    read_error: Option<String>,
 }
+
+/// The largest `metrics.json` read (a 10,000-robot run's is a few megabytes); a larger one
+/// is treated as unreadable.
+const METRICS_CAP: u64 = 64 << 20;
 
 /// Refuses what is not a run directory, with one line saying why.
 fn check_dir(dir: &Path) -> Result<(), ViewError> {
@@ -93,12 +99,13 @@ fn check_dir(dir: &Path) -> Result<(), ViewError> {
     if !dir.is_dir() {
         return Err(not_run("no such directory"));
     }
-    if !dir.join("config.toml").is_file() {
-        return Err(not_run(
+    match crate::files::open_record(&dir.join("config.toml")) {
+        Ok(Some(_)) => Ok(()),
+        Ok(None) => Err(not_run(
             "not a run directory (no config.toml; `swarm run` prints the directory it writes)",
-        ));
+        )),
+        Err(e) => Err(ViewError::NotARun(e.to_string())),
     }
-    Ok(())
 }
 
 impl Run {
@@ -122,9 +129,11 @@ impl Run {
             trajectory: TrajectoryIndex::new(&dir.join("trajectory.csv"), robots),
             events,
             radio,
+            read_error: None,
         };
-        run.refresh()
-            .map_err(|e| ViewError::NotARun(format!("{}: cannot read: {e}", dir.display())))?;
+        run.refresh().map_err(|e| {
+            ViewError::NotARun(format!("{}: cannot read the run: {e}", dir.display()))
+        })?;
         if run.status().state != "live" && run.trajectory.is_empty() {
             return Err(ViewError::NotARun(format!(
                 "{}: the run recorded no whole tick (trajectory.csv is missing or empty)",
@@ -134,8 +143,15 @@ impl Run {
         Ok(run)
     }
 
-    /// Reads what the run appended since the last call.
+    /// Reads what the run appended since the last call; an error is also kept for the
+    /// page's banner until a refresh succeeds.
     pub fn refresh(&mut self) -> std::io::Result<()> {
+        let read = self.read_new();
+        self.read_error = read.as_ref().err().map(|e| e.to_string());
+        read
+    }
+
+    fn read_new(&mut self) -> std::io::Result<()> {
         self.trajectory.refresh()?;
         self.meta.aerial |= self.trajectory.aerial();
         self.events.refresh()?;
@@ -148,7 +164,8 @@ impl Run {
 
     /// Whether the run is going on: its orchestrator holds the directory's lock.
     fn locked(&self) -> bool {
-        let Ok(file) = std::fs::File::open(self.dir.join(".lock")) else {
+        // Never a FIFO or a link at its name: only a regular file is a lock.
+        let Ok(Some(file)) = crate::files::open_record(&self.dir.join(".lock")) else {
             return false;
         };
         matches!(
@@ -159,9 +176,10 @@ impl Run {
 
     /// Where the run is now.
     pub fn status(&self) -> Status {
-        let metrics = std::fs::read_to_string(self.dir.join("metrics.json"))
+        let metrics = crate::files::read_capped(&self.dir.join("metrics.json"), METRICS_CAP)
             .ok()
-            .and_then(|t| serde_json::from_str::<Value>(&t).ok());
+            .flatten()
+            .and_then(|t| serde_json::from_slice::<Value>(&t).ok());
         let frames = self.trajectory.len();
         let last = frames
             .checked_sub(1)
@@ -189,6 +207,23 @@ impl Run {
                 "trajectory.csv ends in a torn line: shown up to its last whole tick, {last}."
             ));
         }
+        let mut notes: Vec<String> = banner.into_iter().collect();
+        if let Some(e) = &self.read_error {
+            notes.push(format!("Cannot read the run's records: {e}."));
+        }
+        let long = [
+            ("trajectory.csv", self.trajectory.long_lines()),
+            ("events.jsonl", self.events.long_lines()),
+            ("radio.csv", self.radio.long_lines()),
+        ];
+        for (name, n) in long.into_iter().filter(|&(_, n)| n > 0) {
+            let lines = if n == 1 { "line" } else { "lines" };
+            notes.push(format!(
+                "{name}: {n} {lines} longer than {} KiB skipped.",
+                crate::tail::MAX_LINE >> 10
+            ));
+        }
+        let banner = (!notes.is_empty()).then(|| notes.join(" "));
         Status {
             state,
             frames,
@@ -215,7 +250,10 @@ fn meta(dir: &Path, cfg: &Config, roles: &'static [RoleDef]) -> Meta {
     let robots = cfg.robots.count as usize;
     Meta {
         name: cfg.scenario.name.clone(),
-        dir: dir.display().to_string(),
+        dir: dir
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
         dt: cfg.scenario.dt,
         ticks_planned: cfg.scenario.ticks,
         robots: cfg.robots.count,

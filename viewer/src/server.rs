@@ -11,7 +11,6 @@ use axum::http::{StatusCode, header};
 use axum::response::sse::{Event, KeepAlive, Sse};
 use axum::response::{IntoResponse, Json, Response};
 use axum::routing::get;
-use futures_util::Stream;
 use serde::Deserialize;
 use serde_json::json;
 use tokio::sync::watch;
@@ -25,10 +24,15 @@ const LIVE_REFRESH: Duration = Duration::from_millis(100);
 /// a run being restarted into the same directory does).
 const IDLE_REFRESH: Duration = Duration::from_millis(1000);
 
+/// Live streams open at once (a page holds one); one more is refused with 503, so streams
+/// that never end cannot take every connection ([`crate::conns::MAX_CONNECTIONS`]).
+pub const MAX_LIVE_STREAMS: usize = 16;
+
 /// What every request handler shares.
 pub struct Shared {
     run: Mutex<Run>,
     status: watch::Sender<Status>,
+    live_streams: Arc<tokio::sync::Semaphore>,
 }
 
 impl Shared {
@@ -44,25 +48,33 @@ pub fn shared(run: Run) -> Arc<Shared> {
     Arc::new(Shared {
         run: Mutex::new(run),
         status: watch::Sender::new(status),
+        live_streams: Arc::new(tokio::sync::Semaphore::new(MAX_LIVE_STREAMS)),
     })
 }
 
 /// Reads the run's new records every [`LIVE_REFRESH`] (while live) and tells the live
 /// streams when something changed.
 pub async fn refresher(shared: Arc<Shared>) {
+    let mut last_error: Option<String> = None;
     loop {
         let s = shared.clone();
-        let status = tokio::task::spawn_blocking(move || {
+        let refreshed = tokio::task::spawn_blocking(move || {
             let mut run = s.run();
-            if let Err(e) = run.refresh() {
-                tracing::warn!("cannot read the run's records: {e}");
-            }
-            run.status()
+            let error = run.refresh().err().map(|e| e.to_string());
+            (run.status(), error)
         })
         .await;
-        let Ok(status) = status else {
+        let Ok((status, error)) = refreshed else {
             return;
         };
+        // Said once, not every refresh; the page's banner shows it while it lasts.
+        if error.is_some() && error != last_error {
+            tracing::warn!(
+                "cannot read the run's records: {}",
+                error.as_deref().unwrap_or("")
+            );
+        }
+        last_error = error;
         let live = status.state == "live";
         shared.status.send_if_modified(|s| {
             if *s != status {
@@ -141,20 +153,31 @@ async fn status(State(s): State<Arc<Shared>>) -> Json<Status> {
     Json(s.status.borrow().clone())
 }
 
-/// The status now, then each time it changes; the stream ends with the server.
-async fn live(State(s): State<Arc<Shared>>) -> Sse<impl Stream<Item = Result<Event, Infallible>>> {
+/// The status now, then each time it changes; the stream ends with the server. At most
+/// [`MAX_LIVE_STREAMS`] at once.
+async fn live(State(s): State<Arc<Shared>>) -> Response {
+    let Ok(slot) = s.live_streams.clone().try_acquire_owned() else {
+        return (
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!("swarm view: {MAX_LIVE_STREAMS} live views are open already"),
+        )
+            .into_response();
+    };
     let rx = s.status.subscribe();
-    let stream = futures_util::stream::unfold((rx, true), |(mut rx, first)| async move {
-        if !first {
-            rx.changed().await.ok()?;
-        }
-        let status = rx.borrow_and_update().clone();
-        let event = Event::default()
-            .json_data(&status)
-            .unwrap_or_else(|_| Event::default().data("{}"));
-        Some((Ok(event), (rx, false)))
-    });
-    Sse::new(stream).keep_alive(KeepAlive::default())
+    let stream =
+        futures_util::stream::unfold((rx, true, slot), |(mut rx, first, slot)| async move {
+            if !first {
+                rx.changed().await.ok()?;
+            }
+            let status = rx.borrow_and_update().clone();
+            let event = Event::default()
+                .json_data(&status)
+                .unwrap_or_else(|_| Event::default().data("{}"));
+            Some((Ok::<_, Infallible>(event), (rx, false, slot)))
+        });
+    Sse::new(stream)
+        .keep_alive(KeepAlive::default())
+        .into_response()
 }
 
 #[derive(Deserialize)]

@@ -6,10 +6,12 @@
 //! simply not a tick yet. Only the bytes past what was already scanned are read on a refresh,
 //! so following a live run costs one `read` of the new rows.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use swarmrt_protocol::RobotState;
 use swarmrt_protocol::records::Columns;
+
+use crate::tail::Tail;
 
 /// Bytes of one robot in one frame: `f32` x, y, z, theta, then `u8` state, role, flags
 /// (bit 0: lidar on) and one spare byte; little-endian.
@@ -49,11 +51,9 @@ pub struct FullRow {
 /// The whole ticks of a `trajectory.csv` found so far.
 #[derive(Debug)]
 pub struct TrajectoryIndex {
-    path: PathBuf,
+    tail: Tail,
     robots: usize,
     cols: Option<Columns>,
-    /// Bytes looked at: the end of the last whole line.
-    scanned: u64,
     /// The tick being read (not yet all rows): its number, first byte and rows seen.
     open: Option<(u64, u64, usize)>,
     /// Tick numbers of the whole ticks, in file order.
@@ -69,10 +69,9 @@ impl TrajectoryIndex {
     /// An index of `path` for `robots` robots; nothing is read until [`Self::refresh`].
     pub fn new(path: &Path, robots: usize) -> TrajectoryIndex {
         TrajectoryIndex {
-            path: path.to_path_buf(),
+            tail: Tail::new(path),
             robots,
             cols: None,
-            scanned: 0,
             open: None,
             ticks: Vec::new(),
             starts: Vec::new(),
@@ -105,12 +104,15 @@ impl TrajectoryIndex {
         }
     }
 
-    /// True when the file has bytes past the last whole line (a torn line, or a tick being
+    /// True when the file has bytes past the last whole tick (a torn line, or a tick being
     /// written).
     pub fn has_tail(&self) -> bool {
-        std::fs::metadata(&self.path)
-            .map(|m| m.len() > self.scanned || self.open.is_some())
-            .unwrap_or(false)
+        self.tail.pending() || self.open.is_some()
+    }
+
+    /// Lines longer than [`crate::tail::MAX_LINE`], skipped.
+    pub fn long_lines(&self) -> u64 {
+        self.tail.long_lines()
     }
 
     /// True when the file is aerial (has a `z` column).
@@ -121,10 +123,10 @@ impl TrajectoryIndex {
     /// Reads what was appended since the last call; returns the number of new whole ticks.
     pub fn refresh(&mut self) -> std::io::Result<usize> {
         let before = self.ticks.len();
-        let path = self.path.clone();
-        self.scanned = crate::tail::lines_from(&path, self.scanned, |line, offset, next| {
-            self.line(line, offset, next)
-        })?;
+        let mut tail = std::mem::take(&mut self.tail);
+        let read = tail.read_new(|line, offset, next| self.line(line, offset, next));
+        self.tail = tail;
+        read?;
         Ok(self.ticks.len() - before)
     }
 
@@ -181,9 +183,19 @@ impl TrajectoryIndex {
         (start, end)
     }
 
-    fn read_range(&self, from: usize, to: usize) -> std::io::Result<Vec<u8>> {
+    /// Calls `row(fields)` for each line of frames `from..to`, read a block at a time.
+    fn each_row(
+        &self,
+        from: usize,
+        to: usize,
+        mut row: impl FnMut(&[&str]),
+    ) -> std::io::Result<()> {
         let (start, end) = self.byte_range(from, to);
-        crate::tail::read_range(&self.path, start, end)
+        crate::tail::lines_in(self.tail.path(), start, end, |line| {
+            let text = String::from_utf8_lossy(line);
+            let fields: Vec<&str> = text.split(',').collect();
+            row(&fields);
+        })
     }
 
     /// Frames `from..to` (clamped to the whole ticks) packed for the page: the header
@@ -212,27 +224,24 @@ impl TrajectoryIndex {
             return Ok(out);
         }
         let cols = self.cols.expect("a whole tick implies a header");
-        let buf = self.read_range(from, to)?;
-        let text = String::from_utf8_lossy(&buf);
         let ticks = &self.ticks[from..to];
-        for line in text.lines() {
-            let f: Vec<&str> = line.split(',').collect();
+        self.each_row(from, to, |f| {
             if f.len() != cols.count {
-                continue;
+                return;
             }
             let (Some(id), Some(tick)) = (
                 f[cols.id].parse::<usize>().ok(),
                 f[cols.tick].parse::<u64>().ok(),
             ) else {
-                continue;
+                return;
             };
             // A row belongs to the frame of its own tick: rows of a tick the index refused
             // (never whole) are skipped, not shifted into the next frame.
             let Ok(frame) = ticks.binary_search(&tick) else {
-                continue;
+                return;
             };
             if id >= n {
-                continue;
+                return;
             }
             let num = |k: usize| f.get(k).and_then(|v| v.parse::<f32>().ok()).unwrap_or(0.0);
             let at = data_at + (frame * n + id) * ROBOT_BYTES;
@@ -249,7 +258,7 @@ impl TrajectoryIndex {
             rec[16] = state as u8;
             rec[17] = role(id as u32, tick);
             rec[18] = u8::from(f.get(cols.lidar) == Some(&"1"));
-        }
+        })?;
         Ok(out)
     }
 
@@ -259,19 +268,19 @@ impl TrajectoryIndex {
             return Ok(None);
         }
         let cols = self.cols.expect("a whole tick implies a header");
-        let buf = self.read_range(i, i + 1)?;
-        let text = String::from_utf8_lossy(&buf);
-        for line in text.lines() {
-            let f: Vec<&str> = line.split(',').collect();
-            if f.len() != cols.count
+        let tick = self.ticks[i];
+        let mut found = None;
+        self.each_row(i, i + 1, |f| {
+            if found.is_some()
+                || f.len() != cols.count
                 || f[cols.id].parse::<u32>().ok() != Some(id)
-                || f[cols.tick].parse::<u64>().ok() != Some(self.ticks[i])
+                || f[cols.tick].parse::<u64>().ok() != Some(tick)
             {
-                continue;
+                return;
             }
             let num = |k: usize| f.get(k).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
-            return Ok(Some(FullRow {
-                tick: self.ticks[i],
+            found = Some(FullRow {
+                tick,
                 id,
                 x: num(cols.x),
                 y: num(cols.y),
@@ -282,9 +291,9 @@ impl TrajectoryIndex {
                 omega: num(cols.omega),
                 lidar: f.get(cols.lidar) == Some(&"1"),
                 state: f.get(cols.state).unwrap_or(&"").to_string(),
-            }));
-        }
-        Ok(None)
+            });
+        })?;
+        Ok(found)
     }
 }
 
