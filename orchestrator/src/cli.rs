@@ -97,7 +97,8 @@ pub struct ServeArgs {
     /// Port of the page [default: a free one].
     #[arg(long, default_value_t = 0)]
     pub port: u16,
-    /// Address to listen on; anything but loopback exposes the run to the network.
+    /// Address to listen on. Beyond loopback every request must carry a random token, which
+    /// the printed URL holds (http://ADDR:PORT/?token=...): share that URL to share the run.
     #[arg(long, default_value = "127.0.0.1")]
     pub listen: std::net::IpAddr,
 }

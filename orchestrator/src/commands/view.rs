@@ -15,7 +15,8 @@ fn user_error(e: swarmrt_viewer::ViewError) -> SwarmError {
 pub fn bind(serve: &ServeArgs) -> SwarmResult<std::net::TcpListener> {
     if !serve.listen.is_loopback() {
         eprintln!(
-            "warning: listening on {}: anyone who can reach it can watch the run",
+            "warning: listening on {}: the page asks for the token in the URL printed below; \
+             anyone who has that URL can watch the run",
             serve.listen
         );
     }
