@@ -7,7 +7,8 @@ use std::io;
 use std::os::unix::fs::{DirBuilderExt, MetadataExt, OpenOptionsExt, PermissionsExt};
 use std::path::Path;
 use swarmrt_protocol::services::{
-    LEGACY_IPC_BASE_DIRS, SHM_DIR, euid, ipc_base_dir, ipc_root_of, shm_prefix_of, valid_run_id,
+    LEGACY_IPC_BASE_DIRS, SHM_BASE_ENV, SHM_DIR, euid, ipc_base_dir, ipc_root_of, shm_prefix_of,
+    valid_run_id,
 };
 
 /// File in a run's iceoryx2 root holding the orchestrator's pid.
@@ -42,7 +43,9 @@ impl BaseRefused {
     }
 }
 
-/// Marks `run_id` as owned by this process, so `swarm clean` leaves it alone while it lives.
+/// Marks `run_id` as owned by this process, so `swarm clean` leaves it alone while it lives,
+/// and makes the run's iceoryx2 management segment private before any node opens it
+/// ([`crate::mgmt_segment`]).
 /// The root appears atomically (built aside, then renamed) with its owner file inside, so a
 /// concurrent `swarm clean` never sees an unowned root of a live run.
 ///
@@ -60,7 +63,12 @@ pub fn claim(run_id: &str) -> io::Result<()> {
     std::fs::create_dir(&aside)?;
     let owner = format!("{pid} {}", start_time(pid as i32).unwrap_or(0));
     std::fs::write(aside.join(OWNER_FILE), owner)?;
-    std::fs::rename(&aside, ipc_root_of(run_id))
+    std::fs::rename(&aside, ipc_root_of(run_id))?;
+    // Before any node of the run exists, so every node opens this private one.
+    let run = swarmrt_protocol::services::RunServices::new(run_id);
+    let cfg = crate::ipc_config(&run).map_err(io::Error::other)?;
+    crate::mgmt_segment::ensure(&cfg)
+        .map_err(|e| io::Error::new(io::ErrorKind::PermissionDenied, BaseRefused(e.to_string())))
 }
 
 /// The longest base whose runs' iceoryx2 sockets still fit `sun_path` (108 bytes with its
@@ -112,13 +120,15 @@ fn make_private_base(base: &Path) -> io::Result<()> {
             dir.set_permissions(std::fs::Permissions::from_mode(0o700))?;
         }
         Err(e) if e.kind() == io::ErrorKind::AlreadyExists => tighten_own_base(base),
+        // The base is the user's choice (SWARMRT_SHM_BASE) or their /dev/shm: a base that
+        // cannot be made is theirs to fix, one line and exit 2.
         Err(e) => {
             return Err(io::Error::new(
                 e.kind(),
-                format!(
+                BaseRefused(format!(
                     "cannot create the shared-memory root {}: {e}",
                     base.display()
-                ),
+                )),
             ));
         }
     }
@@ -188,7 +198,10 @@ fn check_base_for(base: &Path, euid: u32) -> io::Result<()> {
         return refuse(
             io::ErrorKind::PermissionDenied,
             format!(
-                "owned by uid {}, not by you (uid {euid}); remove it or ask its owner",
+                "owned by uid {}, not by you (uid {euid}): another user made it first, and \
+                 only they or root can remove it; set {SHM_BASE_ENV} to a directory of your \
+                 own on a tmpfs (at most 27 bytes, e.g. {SHM_BASE_ENV}=/dev/shm/swarmrt-{euid}-own) \
+                 or ask root to remove it",
                 meta.uid()
             ),
         );
@@ -446,7 +459,10 @@ mod tests {
             refusal(&base, other),
             format!(
                 "refusing the shared-memory root {}: owned by uid {me}, not by you \
-                 (uid {other}); remove it or ask its owner",
+                 (uid {other}): another user made it first, and only they or root can \
+                 remove it; set SWARMRT_SHM_BASE to a directory of your own on a tmpfs (at \
+                 most 27 bytes, e.g. SWARMRT_SHM_BASE=/dev/shm/swarmrt-{other}-own) or ask \
+                 root to remove it",
                 base.display()
             )
         );

@@ -25,6 +25,7 @@ use swarmrt_protocol::{Command, Observation, ObservationHeader};
 pub mod bell;
 pub mod cleanup;
 pub mod lines;
+pub mod mgmt_segment;
 pub mod rounds;
 
 /// Shortcut for the iceoryx2 service flavour every process uses.
@@ -113,9 +114,12 @@ pub fn raise_fd_limit() -> std::io::Result<u64> {
 }
 
 /// Creates a node named `name` with the run's config, and makes SIGINT and SIGTERM stick
-/// for [`termination_requested`].
+/// for [`termination_requested`]. The run's management segment is checked first (made
+/// private if missing, refused in one line if another user could have touched it:
+/// [`mgmt_segment`]), so the node never waits on a segment it cannot trust.
 pub fn node(run: &RunServices, name: &str) -> Result<Node<Svc>, IpcError> {
     let cfg = ipc_config(run)?;
+    mgmt_segment::ensure(&cfg)?;
     let name = NodeName::new(name).map_err(|e| format!("node name {name}: {e:?}"))?;
     let node = NodeBuilder::new()
         .name(&name)

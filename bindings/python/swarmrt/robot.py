@@ -71,6 +71,39 @@ class ProtocolError(RuntimeError):
     """The world speaks another protocol version, or the sample has no slot for this robot."""
 
 
+def _check_mgmt_segment(prefix: str) -> None:
+    """Refuses a run whose iceoryx2 management segment another user could have touched, as
+    the Rust robot does (ipc/src/mgmt_segment.rs): the orchestrator makes it 0600 before any
+    node exists; iceoryx2 0.10 would otherwise open one that is 0666 or empty, and wait for
+    ever on an empty one."""
+    import glob
+    import stat
+
+    found = glob.glob(f"/dev/shm/{glob.escape(prefix)}*_node.*.global_mgmt")
+    if not found:
+        raise RuntimeError(
+            f"the run's shared-memory segment /dev/shm/{prefix}*_node.*.global_mgmt is missing; "
+            "start robots through `swarm run`"
+        )
+    for path in found:
+        st = os.lstat(path)
+        why = None
+        if not stat.S_ISREG(st.st_mode):
+            why = "it is not a regular file"
+        elif st.st_uid != os.geteuid():
+            why = f"it is owned by uid {st.st_uid}, not by you (uid {os.geteuid()})"
+        elif st.st_mode & 0o077:
+            why = f"group or others may open it (mode {stat.S_IMODE(st.st_mode):04o})"
+        elif st.st_size < 16:
+            why = "it is empty"
+        if why:
+            raise RuntimeError(
+                f"refusing the run's shared-memory segment {path}: {why}; another local user "
+                "may have planted or changed it (remove the run with `swarm clean` and start "
+                "it again)"
+            )
+
+
 def _env(name: str) -> str:
     try:
         return os.environ[name]
@@ -156,6 +189,7 @@ class Robot:
         # The run's own root directory and shared-memory prefix: without them this node
         # would look for the services in iceoryx2's default location and not find them.
         cfg = iox2.config.from_file(iox2.FilePath.new(_env("SWARMRT_IPC_CONFIG")))
+        _check_mgmt_segment(_env("SWARMRT_IPC_PREFIX"))
         node = (
             iox2.NodeBuilder.new()
             .name(iox2.NodeName.new(_env("SWARMRT_NODE_NAME")))
