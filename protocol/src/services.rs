@@ -6,7 +6,9 @@
 use std::path::PathBuf;
 
 /// The directory under which this user's runs keep their iceoryx2 files (one sub-directory
-/// per run): `/dev/shm/swarmrt-<euid>`, or the value of [`SHM_BASE_ENV`] when it is set.
+/// per run): the value of [`SHM_BASE_ENV`] when it is set; else `$XDG_RUNTIME_DIR/swarmrt`
+/// when the login session gives this user a private tmpfs there ([`xdg_base`]), which no
+/// other user can create first; else `/dev/shm/swarmrt-<euid>`.
 ///
 /// Private to its user (mode 0700, checked by `swarmrt_ipc::cleanup::claim` before every
 /// run), so no other user can list, read or replace a run's files. On tmpfs, beside the
@@ -17,8 +19,45 @@ use std::path::PathBuf;
 pub fn ipc_base_dir() -> PathBuf {
     match std::env::var_os(SHM_BASE_ENV) {
         Some(base) if !base.is_empty() => PathBuf::from(base),
-        _ => PathBuf::from(format!("{SHM_DIR}/swarmrt-{}", euid())),
+        _ => xdg_base().unwrap_or_else(default_shm_base),
     }
+}
+
+/// `/dev/shm/swarmrt-<euid>`: the base without [`SHM_BASE_ENV`] or a usable
+/// `$XDG_RUNTIME_DIR`. Another user may create it first in the world-writable /dev/shm;
+/// `claim` then refuses it and says what to do.
+pub fn default_shm_base() -> PathBuf {
+    PathBuf::from(format!("{SHM_DIR}/swarmrt-{}", euid()))
+}
+
+/// `$XDG_RUNTIME_DIR/swarmrt` when `XDG_RUNTIME_DIR` is an absolute path to a directory of
+/// this user with no access for group or others, on a tmpfs (iceoryx2's files are created
+/// and removed by the hundred), and short enough for iceoryx2's socket paths (the base may
+/// be at most 27 bytes). Anything else is passed over for `/dev/shm`, silently: the
+/// variable is the login manager's, not a choice the user made for swarm.
+pub fn xdg_base() -> Option<PathBuf> {
+    use std::os::unix::fs::MetadataExt;
+    let dir = PathBuf::from(std::env::var_os("XDG_RUNTIME_DIR")?);
+    let base = dir.join("swarmrt");
+    if !dir.is_absolute() || base.as_os_str().len() > 27 {
+        return None;
+    }
+    let meta = std::fs::symlink_metadata(&dir).ok()?;
+    if !meta.is_dir() || meta.uid() != euid() || meta.mode() & 0o077 != 0 || !on_tmpfs(&dir) {
+        return None;
+    }
+    Some(base)
+}
+
+/// True when `dir` lies on a tmpfs.
+fn on_tmpfs(dir: &std::path::Path) -> bool {
+    use std::os::unix::ffi::OsStrExt;
+    let Ok(c) = std::ffi::CString::new(dir.as_os_str().as_bytes()) else {
+        return false;
+    };
+    // SAFETY: `c` is a valid NUL-terminated path; statfs only writes the struct we pass.
+    let mut fs: libc::statfs = unsafe { std::mem::zeroed() };
+    unsafe { libc::statfs(c.as_ptr(), &mut fs) == 0 && fs.f_type == libc::TMPFS_MAGIC }
 }
 
 /// Environment variable that, when set, replaces [`ipc_base_dir`]'s `/dev/shm/swarmrt-<euid>`
@@ -229,10 +268,14 @@ mod tests {
 
     #[test]
     fn the_base_is_per_user() {
-        if std::env::var_os(SHM_BASE_ENV).is_none() {
+        if std::env::var_os(SHM_BASE_ENV).is_none() && xdg_base().is_none() {
             let base = ipc_base_dir();
             assert_eq!(base, PathBuf::from(format!("/dev/shm/swarmrt-{}", euid())));
             assert_eq!(ipc_root_of("00ab"), base.join("00ab"));
         }
+        assert_eq!(
+            default_shm_base(),
+            PathBuf::from(format!("/dev/shm/swarmrt-{}", euid()))
+        );
     }
 }
