@@ -198,9 +198,10 @@ pub fn host_session(connect: &str, robots: usize, tls: Tls) -> Result<zenoh::Ses
 pub fn layout(config_toml: &str) -> u32 {
     let mut h = crc32fast::Hasher::new();
     let shape = format!(
-        "swarmrt v{PROTOCOL_VERSION} obs {} cmd {} rays {MAX_LIDAR_RAYS} inbox {MAX_INBOX} outbox {MAX_OUTBOX}\n",
+        "swarmrt v{PROTOCOL_VERSION} obs {} cmd {} rays {MAX_LIDAR_RAYS} inbox {MAX_INBOX} outbox {MAX_OUTBOX} wire {}\n",
         std::mem::size_of::<Observation>(),
         std::mem::size_of::<Command>(),
+        crate::wire::WIRE_REVISION,
     );
     h.update(shape.as_bytes());
     h.update(config_toml.as_bytes());

@@ -1,7 +1,9 @@
 //! The two messages per remote host per tick, and the join handshake, as bytes on Zenoh.
 //!
 //! World -> host ([`Down`]): that host's observation slots and which of its robots the world
-//! waits for. Host -> world ([`Up`]): one batch of its robots' commands. Slots travel
+//! waits for. Host -> world ([`Up`]): one batch of its robots' commands. When the world
+//! dropped messages of a host (it sent past its share of the world's queue), the world asks
+//! it to resend ([`Down::Resend`]) and it answers with what it still holds ([`Up::Resent`]). Slots travel
 //! compactly (only the valid lidar rays, neighbours, frames and report bytes), so a 6,216-byte
 //! slot of a goto robot with 16 rays is a few hundred bytes on the wire. Length fields travel
 //! raw, so a robot's malformed length reaches the world exactly as it was sent and is refused
@@ -34,6 +36,17 @@ pub enum Down {
         /// The last tick.
         tick: u64,
     },
+    /// Messages of this host were dropped while the world waited for these robots: send
+    /// again their first command since `tick`'s slots (`answers`) and their last hello
+    /// (`hellos`).
+    Resend {
+        /// The world's current tick.
+        tick: u64,
+        /// Robots whose answer to `tick` the world has not received.
+        answers: Vec<u32>,
+        /// Robots whose hello the world has not received.
+        hellos: Vec<u32>,
+    },
 }
 
 /// Host -> world.
@@ -51,7 +64,22 @@ pub enum Up {
     Commands(Vec<(u32, Command)>),
     /// The host's robots are gone after the shutdown; the world may close its session.
     Bye,
+    /// The answer to a [`Down::Resend`]: what the host holds of what was asked. The world
+    /// takes an entry only if it still waits for it, so a resend of something that did
+    /// arrive changes nothing.
+    Resent {
+        /// The tick the answers answer.
+        tick: u64,
+        /// Robots' first commands since that tick's slots.
+        answers: Vec<(u32, Command)>,
+        /// Robots' last hellos.
+        hellos: Vec<(u32, Command)>,
+    },
 }
+
+/// Changes whenever a message is added or changes shape here: part of the handshake's
+/// layout hash ([`crate::link::layout`]), so a host of another wire revision is refused.
+pub const WIRE_REVISION: u32 = 2;
 
 /// Why a message did not decode.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -62,9 +90,11 @@ const DOWN_WELCOME: u8 = 1;
 const DOWN_REFUSE: u8 = 2;
 const DOWN_TICK: u8 = 3;
 const DOWN_SHUTDOWN: u8 = 4;
+const DOWN_RESEND: u8 = 5;
 const UP_JOIN: u8 = 11;
 const UP_COMMANDS: u8 = 12;
 const UP_BYE: u8 = 13;
+const UP_RESENT: u8 = 14;
 
 struct W(Vec<u8>);
 
@@ -88,6 +118,17 @@ impl W {
     fn bytes(&mut self, b: &[u8]) {
         self.u32(b.len() as u32);
         self.0.extend_from_slice(b);
+    }
+    fn ids(&mut self, ids: &[u32]) {
+        self.u32(ids.len() as u32);
+        ids.iter().for_each(|&r| self.u32(r));
+    }
+    fn commands(&mut self, cmds: &[(u32, Command)]) {
+        self.u32(cmds.len() as u32);
+        for (robot, c) in cmds {
+            self.u32(*robot);
+            put_command(self, c);
+        }
     }
     fn frame(&mut self, f: &Frame) {
         self.u32(f.src);
@@ -140,6 +181,16 @@ impl<'a> R<'a> {
             return Err(Malformed("count past the limit"));
         }
         Ok(n)
+    }
+    fn ids(&mut self, limit: usize) -> Result<Vec<u32>, Malformed> {
+        let n = self.count(limit)?;
+        (0..n).map(|_| self.u32()).collect()
+    }
+    fn commands(&mut self, limit: usize) -> Result<Vec<(u32, Command)>, Malformed> {
+        let n = self.count(limit)?;
+        (0..n)
+            .map(|_| Ok((self.u32()?, get_command(self)?)))
+            .collect()
     }
     fn frame(&mut self) -> Result<Frame, Malformed> {
         let mut f = Frame::EMPTY;
@@ -289,6 +340,16 @@ impl Down {
                 w.u8(DOWN_SHUTDOWN);
                 w.u64(*tick);
             }
+            Down::Resend {
+                tick,
+                answers,
+                hellos,
+            } => {
+                w.u8(DOWN_RESEND);
+                w.u64(*tick);
+                w.ids(answers);
+                w.ids(hellos);
+            }
         }
         w.0
     }
@@ -314,6 +375,11 @@ impl Down {
                 }
             }
             DOWN_SHUTDOWN => Down::Shutdown { tick: r.u64()? },
+            DOWN_RESEND => Down::Resend {
+                tick: r.u64()?,
+                answers: r.ids(max_slots)?,
+                hellos: r.ids(max_slots)?,
+            },
             _ => return Err(Malformed("unknown kind")),
         };
         r.end()?;
@@ -333,13 +399,19 @@ impl Up {
             }
             Up::Commands(cmds) => {
                 w.u8(UP_COMMANDS);
-                w.u32(cmds.len() as u32);
-                for (robot, c) in cmds {
-                    w.u32(*robot);
-                    put_command(&mut w, c);
-                }
+                w.commands(cmds);
             }
             Up::Bye => w.u8(UP_BYE),
+            Up::Resent {
+                tick,
+                answers,
+                hellos,
+            } => {
+                w.u8(UP_RESENT);
+                w.u64(*tick);
+                w.commands(answers);
+                w.commands(hellos);
+            }
         }
         w.0
     }
@@ -353,14 +425,19 @@ impl Up {
                 host: String::from_utf8_lossy(r.bytes()?).into_owned(),
                 layout: r.u32()?,
             },
-            UP_COMMANDS => {
-                let n = r.count(max_commands)?;
-                let cmds = (0..n)
-                    .map(|_| Ok((r.u32()?, get_command(&mut r)?)))
-                    .collect::<Result<_, Malformed>>()?;
-                Up::Commands(cmds)
-            }
+            UP_COMMANDS => Up::Commands(r.commands(max_commands)?),
             UP_BYE => Up::Bye,
+            // Together within the batch bound: one answer and one hello per robot at most.
+            UP_RESENT => {
+                let tick = r.u64()?;
+                let answers = r.commands(max_commands)?;
+                let hellos = r.commands(max_commands - answers.len().min(max_commands))?;
+                Up::Resent {
+                    tick,
+                    answers,
+                    hellos,
+                }
+            }
             _ => return Err(Malformed("unknown kind")),
         };
         r.end()?;
@@ -426,6 +503,36 @@ mod tests {
         assert_eq!(back[0].1.outbox_len, u16::MAX);
         assert_eq!(&back[0].1.report[..3], &[1, 2, 3]);
         assert_eq!(back[0].1.v, 0.1);
+    }
+
+    #[test]
+    fn a_resend_and_its_answer_round_trip_within_the_bounds() {
+        let ask = Down::Resend {
+            tick: 9,
+            answers: vec![4, 5],
+            hellos: vec![6],
+        };
+        assert_eq!(Down::decode(&ask.encode(), 3).unwrap(), ask);
+        assert!(
+            Down::decode(&ask.encode(), 1).is_err(),
+            "more ids than robots"
+        );
+        let mut hello = Command::act(6, 0);
+        hello.kind = swarmrt_protocol::messages::CommandKind::Hello as u32;
+        let back = Up::Resent {
+            tick: 9,
+            answers: vec![(4, Command::act(4, 9)), (5, Command::act(5, 9))],
+            hellos: vec![(6, hello)],
+        };
+        assert_eq!(Up::decode(&back.encode(), 3).unwrap(), back);
+        assert!(
+            Up::decode(&back.encode(), 2).is_err(),
+            "past the batch bound"
+        );
+        let bytes = back.encode();
+        for cut in 0..bytes.len() {
+            assert!(Up::decode(&bytes[..cut], 3).is_err(), "cut at {cut}");
+        }
     }
 
     #[test]

@@ -1,82 +1,161 @@
-//! A flood at the world's end of the link stays bounded: oversized messages never reach the
-//! world (Zenoh drops them at `link::max_message_size`), and past the queue's capacity
-//! messages are dropped and counted instead of queued. The link still works afterwards.
+//! A flood at the world's end of the link stays bounded and stays the flooder's: oversized
+//! messages never reach the world (Zenoh drops them at `link::max_message_size`), and a host
+//! that sends faster than the world reads has its own messages dropped and counted against
+//! it, while another host's messages all arrive. Both hosts hold valid certificates of the
+//! run's CA, over the real mutual-TLS session and access control.
 
+use std::path::Path;
 use std::time::{Duration, Instant};
 
-use swarmrt_hosts::HostsFile;
-use swarmrt_hosts::link;
+use crossbeam_channel::Receiver;
+use swarmrt_hosts::link::{self, Tls};
 use swarmrt_hosts::wire::Up;
-use swarmrt_hosts::world_side::{Heard, WorldLink, queue_capacity};
+use swarmrt_hosts::world_side::{Heard, WorldLink};
+use swarmrt_hosts::{HostsFile, certs};
 use zenoh::Wait;
 
 mod support;
 use support::free_port;
 
-#[test]
-fn a_flood_is_dropped_and_counted_and_oversized_messages_never_arrive() {
-    let port = free_port();
-    let text = format!(
-        "[world]\nlisten = \"tcp/127.0.0.1:{port}\"\n[[host]]\nname = \"a\"\nlauncher = [\"sh\"]\nrobots = 2\n"
-    );
-    let hosts = HostsFile::parse("hosts.toml", &text, 4).unwrap();
-    let run_id = "f100d";
-    let (mut world, heard) = WorldLink::open(&hosts, run_id).unwrap();
-    let capacity = queue_capacity(1, 2);
-    assert_eq!(heard.capacity(), Some(capacity));
+/// How long any wait of these tests may take before it fails.
+const LIMIT: Duration = Duration::from_secs(30);
 
-    let host =
-        link::host_session(&format!("tcp/127.0.0.1:{port}"), 2, link::Tls::Insecure).unwrap();
-    let up = host
-        .declare_publisher(link::up_key(run_id, "a"))
+fn hosts(dir: &Path, port: u16) -> HostsFile {
+    let text = format!(
+        "[world]\nlisten = \"quic/127.0.0.1:{port}\"\n\
+         [[host]]\nname = \"a\"\nlauncher = [\"sh\"]\nrobots = 2\n\
+         [[host]]\nname = \"b\"\nlauncher = [\"sh\"]\nrobots = 2\n"
+    );
+    let path = dir.join("hosts.toml");
+    std::fs::write(&path, &text).unwrap();
+    HostsFile::parse(path.to_str().unwrap(), &text, 4).unwrap()
+}
+
+/// Host `name`'s session with its own certificate, and a publisher on its up key.
+fn host(
+    file: &HostsFile,
+    name: &str,
+    port: u16,
+) -> (zenoh::Session, zenoh::pubsub::Publisher<'static>) {
+    let ca = certs::ca_cert(&file.certs);
+    let (cert, key) = certs::host_pair(&file.certs, name);
+    let tls = Tls::Mutual {
+        ca: &ca,
+        cert: &cert,
+        key: &key,
+    };
+    let s = link::host_session(&format!("quic/127.0.0.1:{port}"), 2, tls).unwrap();
+    let up = s
+        .declare_publisher(link::up_key("f100d", name))
         .congestion_control(zenoh::qos::CongestionControl::Block)
         .wait()
         .unwrap();
-    // Let the world's subscriber become known to the host.
-    std::thread::sleep(Duration::from_millis(500));
+    (s, up)
+}
+
+/// Sends a `Bye` every 50 ms until the world hears one from host `i`: then the world's
+/// subscriber is known to that host. Returns once it is, with the queue empty again.
+fn until_heard(up: &zenoh::pubsub::Publisher<'static>, heard: &Receiver<Heard>, i: usize) {
+    let since = Instant::now();
+    loop {
+        up.put(Up::Bye.encode()).wait().unwrap();
+        match heard.recv_timeout(Duration::from_millis(50)) {
+            Ok(Heard::Up { host, .. }) if host == i => break,
+            _ => assert!(since.elapsed() < LIMIT, "host {i} never reached the world"),
+        }
+    }
+    // Byes still on their way.
+    while heard.recv_timeout(Duration::from_millis(200)).is_ok() {}
+}
+
+/// Waits until `n` messages are queued or counted as dropped.
+fn settled(world: &mut WorldLink, heard: &Receiver<Heard>, n: usize) {
+    let since = Instant::now();
+    loop {
+        let dropped: u64 = world.traffic().iter().map(|t| t.dropped).sum();
+        if heard.len() + dropped as usize >= n {
+            return;
+        }
+        assert!(
+            since.elapsed() < LIMIT,
+            "the world never received the flood"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn a_flooding_host_loses_only_its_own_messages_and_is_counted_for_them() {
+    let tmp = tempfile::tempdir().unwrap();
+    let port = free_port();
+    let file = hosts(tmp.path(), port);
+    certs::generate(&file, &file.certs).unwrap();
+    let (mut world, heard) = WorldLink::open(&file, "f100d").unwrap();
+    let (a, a_up) = host(&file, "a", port);
+    let (b, b_up) = host(&file, "b", port);
+    until_heard(&a_up, &heard, 0);
+    until_heard(&b_up, &heard, 1);
+    let before = world.traffic().iter().map(|t| t.dropped).sum::<u64>();
+    assert_eq!(before, 0);
+
+    // Host a, with its valid certificate, floods valid empty batches on its own key while the
+    // world is busy with a tick and reads nothing; oversized messages first.
     let bound = link::max_message_size(2);
     for _ in 0..5 {
-        up.put(vec![0xAB; 2 * bound]).wait().unwrap();
+        a_up.put(vec![0xAB; 2 * bound]).wait().unwrap();
     }
-    let flood = 3 * capacity;
+    let flood = 20_000;
+    let empty = Up::Commands(Vec::new()).encode();
     for _ in 0..flood {
-        up.put(Up::Bye.encode()).wait().unwrap();
+        a_up.put(empty.clone()).wait().unwrap();
     }
-    // Wait until everything sent has been either queued or dropped.
-    let since = Instant::now();
-    while heard.len() + (world.traffic()[0].dropped as usize) < flood
-        && since.elapsed() < Duration::from_secs(20)
-    {
-        std::thread::sleep(Duration::from_millis(50));
+    settled(&mut world, &heard, flood);
+    // Host b answers its tick meanwhile: one batch per robot, say.
+    let answers = 10;
+    for _ in 0..answers {
+        b_up.put(empty.clone()).wait().unwrap();
     }
-    assert!(heard.len() <= capacity, "queue grew past its bound");
-    let dropped = world.traffic()[0].dropped;
-    assert!(dropped > 0, "a flood past the capacity must be dropped");
-    assert_eq!(
-        heard.len() + dropped as usize,
-        flood,
-        "every small message queued or counted"
-    );
-    let mut got = 0;
+    settled(&mut world, &heard, flood + answers);
+
+    let t = world.traffic().to_vec();
+    assert!(t[0].dropped > 0, "a flood past a's share must be dropped");
+    assert_eq!(t[1].dropped, 0, "b lost messages to a's flood: {t:?}");
+    let mut got = [0usize; 2];
     while let Ok(h) = heard.try_recv() {
         match h {
-            Heard::Up { bytes, .. } => {
+            Heard::Up { host, bytes, .. } => {
                 assert!(
                     bytes < bound,
                     "an oversized message of {bytes} bytes arrived"
                 );
-                got += 1;
+                got[host] += 1;
             }
             Heard::Malformed { .. } => panic!("the oversized messages must never arrive"),
-            Heard::Lost { .. } => panic!("the host was not lost"),
+            Heard::Lost { .. } => panic!("no host was lost"),
         }
     }
-    assert_eq!(got, capacity);
-    // The link still works after the flood.
-    up.put(Up::Bye.encode()).wait().unwrap();
-    let h = heard.recv_timeout(Duration::from_secs(5)).unwrap();
-    assert!(matches!(h, Heard::Up { msg: Up::Bye, .. }));
-    drop(up);
-    let _ = host.close().wait();
+    assert_eq!(got[1], answers, "every one of b's messages arrives");
+    assert_eq!(
+        got[0] + t[0].dropped as usize,
+        flood,
+        "each of a's messages queued or counted against a"
+    );
+    assert!(
+        got[0] < flood / 10,
+        "a's queued messages stay bounded: {}",
+        got[0]
+    );
+    // The link still works for both afterwards.
+    for (i, up) in [&a_up, &b_up].into_iter().enumerate() {
+        up.put(Up::Bye.encode()).wait().unwrap();
+        let h = heard.recv_timeout(LIMIT).unwrap();
+        assert!(
+            matches!(h, Heard::Up { host, msg: Up::Bye, .. } if host == i),
+            "{h:?}"
+        );
+    }
+    drop((a_up, b_up));
+    let _ = a.close().wait();
+    let _ = b.close().wait();
     world.close();
 }

@@ -7,7 +7,7 @@
 //! faults on the orchestrator's orders, which arrive as lines on its stdin through the
 //! launcher; its reports go back on stdout. On every exit path it removes its resources.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -93,6 +93,10 @@ pub struct HostStats {
     pub unknown_sender: u64,
     /// Messages from the world that did not decode.
     pub malformed: u64,
+    /// Resends the world asked for (it dropped messages of this host: see `shell.link`).
+    pub resends: u64,
+    /// Commands sent again in answer to them.
+    pub resent: u64,
 }
 
 enum Msg {
@@ -281,6 +285,8 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
     };
     join(args, &toml, &rx, &mut |m| send(m, &mut stats))?;
     report(&HostReport::Joined);
+    #[cfg(feature = "misbehave")]
+    let flood = Flood::from_env(&session, &args.run_id, &args.host);
 
     // `cd <this dir> && iox2 service list` on this host sees the run's local services.
     let ipc_config = dir.join("config/iceoryx2.toml");
@@ -306,6 +312,9 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
         robots: robots.clone(),
         expect: BTreeSet::new(),
         batch: Vec::new(),
+        tick: 0,
+        answered: BTreeMap::new(),
+        hellos: BTreeMap::new(),
         tick_at: Instant::now(),
         flush_each: false,
         deadline: Duration::from_millis(cfg.scenario.deadline_ms),
@@ -316,6 +325,8 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
         }
     }
     let failure = relay.run(&rx, &mut stats, &mut send)?;
+    #[cfg(feature = "misbehave")]
+    drop(flood);
 
     // Tell the robots (a header-only sample), then see them out: EXIT_GRACE to exit on it,
     // then SIGTERM, then SIGKILL.
@@ -406,6 +417,12 @@ struct Relay<'a> {
     expect: BTreeSet<u32>,
     /// Commands not sent up yet.
     batch: Vec<(u32, Command)>,
+    /// The tick of the slots last received.
+    tick: u64,
+    /// Each robot's first command since those slots (its answer), kept for a resend.
+    answered: BTreeMap<u32, Command>,
+    /// Each robot's last hello, kept for a resend until the robot is killed or restarted.
+    hellos: BTreeMap<u32, Command>,
     /// When the current tick's slots were published.
     tick_at: Instant,
     /// Send each answer as it comes: a hello arrived, or the tick is past its deadline.
@@ -428,7 +445,7 @@ impl Relay<'_> {
         loop {
             self.forward_commands(stats, send)?;
             for m in rx.try_iter() {
-                if let Some(end) = self.handle(m, stats)? {
+                if let Some(end) = self.handle(m, stats, send)? {
                     return Ok(end);
                 }
             }
@@ -468,9 +485,11 @@ impl Relay<'_> {
             match self.bindings.accept(origin, &c) {
                 Sample::Robot(robot) => {
                     self.expect.remove(&robot);
+                    self.answered.entry(robot).or_insert(c);
                     self.batch.push((robot, c));
                 }
                 Sample::Hello(robot) => {
+                    self.hellos.insert(robot, c);
                     self.batch.push((robot, c));
                     self.flush_each = true;
                 }
@@ -493,6 +512,7 @@ impl Relay<'_> {
         &mut self,
         m: Msg,
         stats: &mut HostStats,
+        send: &mut SendUp,
     ) -> Result<Option<Option<String>>, IpcError> {
         match m {
             Msg::Down(
@@ -515,8 +535,22 @@ impl Relay<'_> {
                     .into_iter()
                     .filter(|r| self.robots.contains(r))
                     .collect();
+                self.tick = tick;
+                self.answered.clear();
                 self.tick_at = Instant::now();
                 self.flush_each = false;
+            }
+            Msg::Down(
+                Down::Resend {
+                    tick,
+                    answers,
+                    hellos,
+                },
+                bytes,
+            ) => {
+                stats.bytes_down += bytes as u64;
+                stats.resends += 1;
+                self.resend(tick, &answers, &hellos, stats, send)?;
             }
             Msg::Down(Down::Shutdown { .. }, bytes) => {
                 stats.bytes_down += bytes as u64;
@@ -539,16 +573,54 @@ impl Relay<'_> {
         Ok(None)
     }
 
+    /// The world did not get some of what this host sent (messages of it were dropped):
+    /// sends again what it holds of what was asked. Answers only for the tick it holds.
+    fn resend(
+        &mut self,
+        tick: u64,
+        answers: &[u32],
+        hellos: &[u32],
+        stats: &mut HostStats,
+        send: &mut SendUp,
+    ) -> Result<(), IpcError> {
+        let held = |map: &BTreeMap<u32, Command>, ids: &[u32]| -> Vec<(u32, Command)> {
+            ids.iter()
+                .filter_map(|r| map.get(r).map(|c| (*r, *c)))
+                .collect()
+        };
+        let answers = if tick == self.tick {
+            held(&self.answered, answers)
+        } else {
+            Vec::new()
+        };
+        let hellos = held(&self.hellos, hellos);
+        if answers.is_empty() && hellos.is_empty() {
+            // Nothing sent yet of what was asked: it goes up when it comes.
+            return Ok(());
+        }
+        stats.resent += (answers.len() + hellos.len()) as u64;
+        send(
+            &Up::Resent {
+                tick,
+                answers,
+                hellos,
+            },
+            stats,
+        )
+    }
+
     /// A fault the orchestrator ordered for one of this host's robots.
     fn order(&mut self, c: HostControl) -> std::io::Result<()> {
         match c {
             HostControl::Kill { robot } => {
+                self.hellos.remove(&robot);
                 self.bindings.forget(robot);
                 self.sup.kill(robot).iter().for_each(launch::send);
             }
             HostControl::Freeze { robot } => self.sup.freeze(robot).iter().for_each(launch::send),
             HostControl::Thaw { robot } => self.sup.thaw(robot).iter().for_each(launch::send),
             HostControl::Restart { robot, incarnation } => {
+                self.hellos.remove(&robot);
                 self.bindings.expect_hello(robot);
                 for order in self.sup.restart(robot, incarnation) {
                     self.carry_out(order)?;
@@ -590,6 +662,60 @@ impl Relay<'_> {
             pid,
         });
         Ok(())
+    }
+}
+
+/// Test hook (feature `misbehave`, test builds only): `SWARMRT_TEST_HOST_FLOOD=<host>`
+/// makes host `<host>` flood the world with valid empty batches on its own up key, from a
+/// thread of its own, from its join to its end: the attack of a host holding a valid
+/// certificate (issue 48, `tests/tests/multihost.rs`).
+#[cfg(feature = "misbehave")]
+pub const FLOOD_ENV: &str = "SWARMRT_TEST_HOST_FLOOD";
+
+/// The flooding thread of [`FLOOD_ENV`]; stopped when dropped.
+#[cfg(feature = "misbehave")]
+struct Flood {
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    thread: Option<std::thread::JoinHandle<u64>>,
+}
+
+#[cfg(feature = "misbehave")]
+impl Flood {
+    fn from_env(session: &zenoh::Session, run_id: &str, host: &str) -> Option<Flood> {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        if std::env::var(FLOOD_ENV).ok()? != host {
+            return None;
+        }
+        let up = session
+            .declare_publisher(link::up_key(run_id, host))
+            .congestion_control(CongestionControl::Block)
+            .express(true)
+            .wait()
+            .ok()?;
+        let stop = std::sync::Arc::new(AtomicBool::new(false));
+        let flag = stop.clone();
+        let empty = Up::Commands(Vec::new()).encode();
+        let thread = std::thread::spawn(move || {
+            let mut sent = 0u64;
+            while !flag.load(Ordering::Relaxed) && up.put(empty.clone()).wait().is_ok() {
+                sent += 1;
+            }
+            sent
+        });
+        Some(Flood {
+            stop,
+            thread: Some(thread),
+        })
+    }
+}
+
+#[cfg(feature = "misbehave")]
+impl Drop for Flood {
+    fn drop(&mut self) {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        if let Some(sent) = self.thread.take().and_then(|t| t.join().ok()) {
+            tracing::debug!(sent, "flood stopped");
+        }
     }
 }
 

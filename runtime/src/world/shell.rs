@@ -14,7 +14,7 @@ use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::prelude::*;
 use swarmrt_hosts::HostsFile;
 use swarmrt_hosts::wire::{Down, Up, encode_tick};
-use swarmrt_hosts::world_side::{Heard, HostTraffic, WorldLink};
+use swarmrt_hosts::world_side::{Heard, HostTraffic, Resends, WorldLink};
 use swarmrt_ipc::{self as ipc, IpcError};
 use swarmrt_protocol::control::{Control, WorldReport};
 use swarmrt_protocol::services::RunServices;
@@ -22,7 +22,7 @@ use swarmrt_protocol::{
     Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION, RobotState,
 };
 
-use crate::supervisor::hello::{Bindings, Sample};
+use crate::supervisor::hello::{Bindings, Sample, is_hello};
 use swarmrt_scenario::Config;
 
 use super::timing::{TickPhases, TickTimer, TickTiming, thread_cpu_ns};
@@ -195,6 +195,8 @@ struct Remote {
     joined: Vec<bool>,
     lost: Vec<bool>,
     byes: usize,
+    /// When to ask a host whose messages were dropped to send them again.
+    resends: Resends,
 }
 
 impl Remote {
@@ -210,6 +212,7 @@ impl Remote {
             joined: vec![false; n],
             lost: vec![false; n],
             byes: 0,
+            resends: Resends::new(n),
         })
     }
 
@@ -234,6 +237,8 @@ impl Remote {
 
     /// Applies what the hosts said: joins, byes, and their robots' commands, bound by the
     /// same rule as local ones (an entry may claim only the robot it is attributed to).
+    /// Takes at most what was queued when it started, so a host that floods cannot keep
+    /// the world here.
     fn drain(
         &mut self,
         world: &mut World,
@@ -242,11 +247,16 @@ impl Remote {
         commands: &mut [Option<Command>],
         stats: &mut ShellStats,
     ) -> Result<(), IpcError> {
-        while let Ok(h) = self.heard.try_recv() {
+        for _ in 0..self.heard.len() {
+            let Ok(h) = self.heard.try_recv() else {
+                break;
+            };
             match h {
-                Heard::Malformed { host } => self.link.count_up(host, 0, true),
+                Heard::Malformed { host, .. } => self.link.count_up(host, 0, true),
                 Heard::Lost { host } => self.lose(host, world, hellos, pending),
-                Heard::Up { host, msg, bytes } => {
+                Heard::Up {
+                    host, msg, bytes, ..
+                } => {
                     self.link.count_up(host, bytes, false);
                     match msg {
                         Up::Join { host: name, layout } => {
@@ -283,11 +293,91 @@ impl Remote {
                                 take(sample, c, pending, commands, stats);
                             }
                         }
+                        Up::Resent {
+                            tick,
+                            answers,
+                            hellos: again,
+                        } => {
+                            let range = self.link.robots(host);
+                            let mut recovered = 0;
+                            // Only what the world still waits for: a resend of something that
+                            // did arrive is no robot's second answer.
+                            for (robot, c) in again {
+                                if range.contains(&robot)
+                                    && hellos.is_awaiting(robot)
+                                    && is_hello(&c)
+                                {
+                                    let sample =
+                                        hellos.accept_claiming(Origin::Remote(robot), &c, |r| {
+                                            r == robot
+                                        });
+                                    take(sample, c, pending, commands, stats);
+                                    recovered += 1;
+                                }
+                            }
+                            if tick == world.tick() {
+                                for (robot, c) in answers {
+                                    if range.contains(&robot)
+                                        && pending.contains(&robot)
+                                        && hellos.is_bound(robot)
+                                    {
+                                        let sample = hellos.accept_claiming(
+                                            Origin::Remote(robot),
+                                            &c,
+                                            |_| false,
+                                        );
+                                        take(sample, c, pending, commands, stats);
+                                        recovered += 1;
+                                    }
+                                }
+                            }
+                            self.link.count_recovered(host, recovered);
+                        }
                     }
                 }
             }
         }
+        self.ask_resends(world.tick(), hellos, pending)
+    }
+
+    /// Asks each host whose messages were dropped while the world waits for some of its
+    /// robots to send again what the world has not got ([`Resends`] says when).
+    fn ask_resends(
+        &mut self,
+        tick: u64,
+        hellos: &Hellos,
+        pending: &BTreeSet<u32>,
+    ) -> Result<(), IpcError> {
+        let now = Instant::now();
+        for i in 0..self.link.len() {
+            if self.lost[i] || !self.joined[i] {
+                continue;
+            }
+            let range = self.link.robots(i);
+            let awaiting = hellos.awaiting_set();
+            let waiting = pending.range(range.clone()).next().is_some()
+                || awaiting.range(range.clone()).next().is_some();
+            if self.resends.due(i, self.link.dropped(i), waiting, now) {
+                let answers: Vec<u32> = pending.range(range.clone()).copied().collect();
+                let awaited: Vec<u32> = awaiting.range(range).copied().collect();
+                tracing::debug!(host = %self.names[i], tick, ?answers, hellos = ?awaited, "asking for a resend");
+                self.link.count_resend(i);
+                self.link.send(
+                    i,
+                    &Down::Resend {
+                        tick,
+                        answers,
+                        hellos: awaited,
+                    },
+                )?;
+            }
+        }
         Ok(())
+    }
+
+    /// When the world must look again for a resend to ask, though nothing wakes it.
+    fn next_look(&self) -> Option<Instant> {
+        self.resends.next()
     }
 
     /// A host's session is gone: its robots are dead from this tick.
@@ -330,7 +420,9 @@ impl Remote {
         let until = Instant::now() + BYE_TIMEOUT;
         while self.byes < expected {
             match self.heard.recv_deadline(until) {
-                Ok(Heard::Up { host, msg, bytes }) => {
+                Ok(Heard::Up {
+                    host, msg, bytes, ..
+                }) => {
                     self.link.count_up(host, bytes, false);
                     if msg == Up::Bye {
                         self.byes += 1;
@@ -578,8 +670,13 @@ impl Shell<'_> {
         bell.answers() >= target
     }
 
-    /// Sleeps until a robot, a host or the control thread wakes the world, or `timeout`.
+    /// Sleeps until a robot, a host or the control thread wakes the world, or `timeout`
+    /// (or sooner, when a resend held back must be asked for).
     fn sleep(&mut self, timeout: Duration) -> Result<(), IpcError> {
+        let timeout = match self.remote.as_ref().and_then(Remote::next_look) {
+            Some(at) => timeout.min(at.saturating_duration_since(Instant::now())),
+            None => timeout,
+        };
         self.interrupted |= wait(&self.ports.listener, self.node, timeout)?;
         Ok(())
     }
