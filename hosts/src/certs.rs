@@ -6,10 +6,11 @@
 //!
 //! Files in the certificates directory: `ca.pem` and `ca.key` (keep the key away from the
 //! hosts), `world.pem`/`world.key`, `host-<name>.pem`/`host-<name>.key`. Keys are written
-//! 0600, never over an existing file, never through a symbolic link.
+//! 0600, never over an existing file, never through a symbolic link, and all files or none:
+//! a name already taken refuses the whole set before anything is written.
 
 use std::io::Write;
-use std::os::unix::fs::OpenOptionsExt;
+use std::os::unix::fs::{DirBuilderExt, OpenOptionsExt};
 use std::path::{Path, PathBuf};
 
 use rcgen::{
@@ -63,6 +64,25 @@ pub fn world_names(file: &HostsFile) -> Vec<String> {
     names
 }
 
+/// Refuses a target that exists in any form: a symbolic link (never followed, never
+/// replaced) or a file (never overwritten).
+fn refuse_existing(path: &Path) -> Result<(), CertError> {
+    match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(format!("cannot check {}: {e} (nothing was written)", path.display()).into()),
+        Ok(m) if m.file_type().is_symlink() => Err(format!(
+            "{} is a symbolic link; refusing to follow it (nothing was written)",
+            path.display()
+        )
+        .into()),
+        Ok(_) => Err(format!(
+            "{} exists; swarm certs never overwrites a certificate or key (nothing was written: remove the old files, or write elsewhere with --out)",
+            path.display()
+        )
+        .into()),
+    }
+}
+
 /// Writes `bytes` to a new file `path` with `mode`; an existing file or a symbolic link is
 /// refused, never replaced or followed.
 fn write_new(path: &Path, bytes: &[u8], mode: u32) -> Result<(), CertError> {
@@ -77,6 +97,70 @@ fn write_new(path: &Path, bytes: &[u8], mode: u32) -> Result<(), CertError> {
         .and_then(|_| f.sync_all())
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(())
+}
+
+/// Files written aside in a fresh private directory inside the target directory, then put in
+/// place together: each by a hard link, which fails on any existing name (a link planted
+/// meanwhile included) and never follows one. If one cannot be placed, the ones placed are
+/// taken back, so a failure leaves nothing half-made.
+struct Aside {
+    dir: PathBuf,
+    files: Vec<(PathBuf, PathBuf)>,
+}
+
+impl Aside {
+    fn new(out: &Path) -> Result<Aside, CertError> {
+        static NEXT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = out.join(format!(".swarm-certs-{}-{n}", std::process::id()));
+        std::fs::DirBuilder::new()
+            .mode(0o700)
+            .create(&dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        Ok(Aside {
+            dir,
+            files: Vec::new(),
+        })
+    }
+
+    fn write(&mut self, target: PathBuf, text: &str, mode: u32) -> Result<(), CertError> {
+        let name = target
+            .file_name()
+            .ok_or("a certificate file needs a name")?;
+        let aside = self.dir.join(name);
+        write_new(&aside, text.as_bytes(), mode)?;
+        self.files.push((aside, target));
+        Ok(())
+    }
+
+    /// Puts every file in place, or none.
+    fn place(self) -> Result<Vec<PathBuf>, CertError> {
+        let mut placed: Vec<PathBuf> = Vec::new();
+        for (aside, target) in &self.files {
+            if let Err(e) = std::fs::hard_link(aside, target) {
+                for p in &placed {
+                    let _ = std::fs::remove_file(p);
+                }
+                if e.kind() == std::io::ErrorKind::AlreadyExists {
+                    // Taken since the check: say by what.
+                    refuse_existing(target)?;
+                }
+                return Err(format!(
+                    "cannot create {}: {e} (nothing was written)",
+                    target.display()
+                )
+                .into());
+            }
+            placed.push(target.clone());
+        }
+        Ok(placed)
+    }
+}
+
+impl Drop for Aside {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
 }
 
 /// Certificates are valid from the start of this year for two years: long enough for a
@@ -112,16 +196,33 @@ fn leaf(
     Ok((cert.pem(), key.serialize_pem()))
 }
 
+/// Every file [`generate`] writes into `out`, with its mode.
+fn targets(file: &HostsFile, out: &Path) -> Vec<(PathBuf, u32)> {
+    let (wc, wk) = world_pair(out);
+    let mut t = vec![
+        (ca_cert(out), 0o644),
+        (out.join("ca.key"), 0o600),
+        (wc, 0o644),
+        (wk, 0o600),
+    ];
+    for h in &file.hosts {
+        let (c, k) = host_pair(out, &h.name);
+        t.push((c, 0o644));
+        t.push((k, 0o600));
+    }
+    t
+}
+
 /// Makes the CA, the world's and every host's certificate and key of `file` in `out`;
-/// returns the files written. Refuses to overwrite anything.
+/// returns the files written. Refuses to overwrite anything, and writes nothing at all when
+/// any target already exists or is a symbolic link: every target is checked before anything
+/// is made, and the files are written aside and put in place together ([`Aside`]).
 pub fn generate(file: &HostsFile, out: &Path) -> Result<Vec<PathBuf>, CertError> {
-    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
-    let mut written = Vec::new();
-    let mut put = |path: PathBuf, text: &str, mode: u32| -> Result<(), CertError> {
-        write_new(&path, text.as_bytes(), mode)?;
-        written.push(path);
-        Ok(())
-    };
+    let targets = targets(file, out);
+    for (path, _) in &targets {
+        refuse_existing(path)?;
+    }
+    let mut texts = Vec::new();
     let ca_key = KeyPair::generate()?;
     let mut p = CertificateParams::new(Vec::<String>::new())?;
     p.distinguished_name
@@ -130,20 +231,30 @@ pub fn generate(file: &HostsFile, out: &Path) -> Result<Vec<PathBuf>, CertError>
     p.key_usages = vec![KeyUsagePurpose::KeyCertSign, KeyUsagePurpose::CrlSign];
     validity(&mut p);
     let ca = p.self_signed(&ca_key)?;
-    put(ca_cert(out), &ca.pem(), 0o644)?;
-    put(out.join("ca.key"), &ca_key.serialize_pem(), 0o600)?;
+    texts.push(ca.pem());
+    texts.push(ca_key.serialize_pem());
     let issuer = Issuer::new(p, ca_key);
     let (cert, key) = leaf(&issuer, "world", world_names(file), true)?;
-    let (c, k) = world_pair(out);
-    put(c, &cert, 0o644)?;
-    put(k, &key, 0o600)?;
+    texts.push(cert);
+    texts.push(key);
     for h in &file.hosts {
         let (cert, key) = leaf(&issuer, &h.name, Vec::new(), false)?;
-        let (c, k) = host_pair(out, &h.name);
-        put(c, &cert, 0o644)?;
-        put(k, &key, 0o600)?;
+        texts.push(cert);
+        texts.push(key);
     }
-    Ok(written)
+    let created = !out.exists();
+    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let written = Aside::new(out).and_then(|mut aside| {
+        for ((path, mode), text) in targets.into_iter().zip(&texts) {
+            aside.write(path, text, mode)?;
+        }
+        aside.place()
+    });
+    if written.is_err() && created {
+        // Ours and empty again: nothing half-made is left, not even the directory.
+        let _ = std::fs::remove_dir(out);
+    }
+    written
 }
 
 fn read_cert(path: &Path) -> Result<Vec<u8>, String> {

@@ -216,3 +216,58 @@ fn swarm_certs_never_overwrites_and_writes_keys_private() {
             .any(|p| p.contains("world.pem") && p.contains("10.9.9.9")),
     );
 }
+
+/// The names in the certificates directory, sorted.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// Issue 48: a link planted at `ca.key` was refused with a bare "File exists" after `ca.pem`
+/// had been written. Every target is checked first: a link or a taken name anywhere in the
+/// set refuses the whole set in one line naming it, and nothing new is left behind.
+#[test]
+fn a_planted_link_or_a_taken_name_makes_swarm_certs_write_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = hosts(tmp.path(), 7447);
+    std::fs::create_dir(&file.certs).unwrap();
+    let victim = tmp.path().join("victim");
+    std::fs::write(&victim, "the victim's own file\n").unwrap();
+    let planted = file.certs.join("ca.key");
+    std::os::unix::fs::symlink(&victim, &planted).unwrap();
+    let err = certs::generate(&file, &file.certs).unwrap_err().to_string();
+    assert!(
+        err.contains(&planted.display().to_string())
+            && err.contains("is a symbolic link")
+            && !err.contains('\n'),
+        "{err}"
+    );
+    assert_eq!(listing(&file.certs), vec!["ca.key"], "something was written");
+    assert_eq!(
+        std::fs::read_to_string(&victim).unwrap(),
+        "the victim's own file\n"
+    );
+    assert!(std::fs::symlink_metadata(&planted).unwrap().file_type().is_symlink());
+
+    // The last name of the set taken by a file: still nothing written, the file unchanged.
+    std::fs::remove_file(&planted).unwrap();
+    let taken = certs::host_pair(&file.certs, "b").1;
+    std::fs::write(&taken, "mine\n").unwrap();
+    let err = certs::generate(&file, &file.certs).unwrap_err().to_string();
+    assert!(
+        err.contains(&taken.display().to_string()) && err.contains("exists"),
+        "{err}"
+    );
+    assert_eq!(listing(&file.certs), vec!["host-b.key"]);
+    assert_eq!(std::fs::read_to_string(&taken).unwrap(), "mine\n");
+
+    // Free names: the whole set, and no directory of the work left beside it.
+    std::fs::remove_file(&taken).unwrap();
+    let written = certs::generate(&file, &file.certs).unwrap();
+    assert_eq!(written.len(), 8);
+    assert_eq!(listing(&file.certs).len(), 8, "{:?}", listing(&file.certs));
+}
