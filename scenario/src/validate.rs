@@ -406,8 +406,7 @@ fn polygon_area(key: &str, points: &[[f64; 2]]) -> Result<(), KeyError> {
         key.to_string(),
         format!(
             "expected a polygon of at least 3 distinct points, not all on one line, whose \
-             convex hull has an area of at least {} m², got {got}",
-            short(MIN_POLYGON_AREA)
+             convex hull has an area of at least {MIN_POLYGON_AREA:e} m², got {got}"
         ),
     ))
 }
