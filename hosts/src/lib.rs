@@ -6,12 +6,14 @@
 //! - [`wire`]: the messages on the link and their bytes.
 //! - [`link`]: Zenoh sessions, key expressions, the handshake's layout hash.
 //! - [`world_side`]: the world's end of the link.
+//! - [`noise`]: refused TLS handshakes, counted and summarised instead of logged one by one.
 //!
 //! The `swarm-host` process itself is `swarmrt_runtime::host`, beside the other process shells.
 
 pub mod certs;
 pub mod hosts_file;
 pub mod link;
+pub mod noise;
 pub mod wire;
 pub mod world_side;
 

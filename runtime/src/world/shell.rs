@@ -100,6 +100,10 @@ pub struct ShellStats {
     /// Traffic with each remote host (`--hosts` runs only).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub link: Vec<HostTraffic>,
+    /// TLS handshakes refused on the hosts' port (`--hosts` runs only): strangers, or hosts
+    /// with the wrong certificate, counted instead of logged one by one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tls: Option<swarmrt_hosts::noise::Refusals>,
     /// How the wall clock went (`--realtime` runs only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub realtime: Option<RealtimeStats>,
@@ -437,6 +441,7 @@ impl Remote {
             }
         }
         stats.link = self.link.traffic().to_vec();
+        stats.tls = Some(swarmrt_hosts::noise::refused());
         self.link.close();
     }
 }
