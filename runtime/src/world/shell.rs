@@ -5,7 +5,6 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use std::io::Write;
-use std::path::Path;
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, TryRecvError};
@@ -489,7 +488,7 @@ fn spawn_control_thread(run: &RunServices) -> Result<Receiver<Control>, IpcError
 pub fn run(
     run: &RunServices,
     cfg: &Config,
-    out_dir: &Path,
+    out_dir: &swarmrt_scenario::safe_fs::OutDir,
     vocabulary: swarmrt_protocol::Vocabulary,
     hosts: Option<(&HostsFile, u32)>,
     mode: Mode,
