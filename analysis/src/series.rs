@@ -2,11 +2,12 @@
 //! records, written as `<name>.csv` in the run directory and drawn as their line plots.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::Context;
 use swarmrt_agent::behaviour::Series;
 use swarmrt_scenario::Config;
+use swarmrt_scenario::safe_fs::OutDir;
 
 use crate::plot::series::write_series_plot;
 
@@ -36,22 +37,20 @@ pub fn to_csv(s: &Series) -> String {
     out
 }
 
-/// Writes every table of the run in `dir` (atomically: temp file, then rename; a symbolic
-/// link planted at either name is refused, never followed) and its plots; returns the files
-/// written.
-pub fn write_all(cfg: &Config, dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+/// Writes every table of the run in `dir` through its handle (atomically: temp file, then
+/// rename; a symbolic link planted at either name is refused, never followed) and its plots;
+/// returns the names of the files written.
+pub fn write_all(cfg: &Config, dir: &OutDir) -> anyhow::Result<Vec<String>> {
     let mut written = Vec::new();
-    for s in from_records(cfg, dir)? {
-        let path = dir.join(format!("{}.csv", s.name));
+    for s in from_records(cfg, dir.path())? {
+        let name = format!("{}.csv", s.name);
         // Through `<name>.csv.tmp`, as before.
-        swarmrt_scenario::safe_fs::write_replace_nofollow(&path, to_csv(&s))
-            .with_context(|| format!("writing {}", path.display()))?;
-        written.push(path);
+        dir.write_replace(&name, to_csv(&s))
+            .with_context(|| format!("writing {}", dir.join(&name).display()))?;
+        written.push(name);
         for plot in &s.plots {
-            let svg = dir.join(format!("{}.svg", plot.file));
-            let png = dir.join(format!("{}.png", plot.file));
-            write_series_plot(&s, plot, &svg, &png)?;
-            written.extend([svg, png]);
+            write_series_plot(&s, plot, dir)?;
+            written.extend([format!("{}.svg", plot.file), format!("{}.png", plot.file)]);
         }
     }
     Ok(written)

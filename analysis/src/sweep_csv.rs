@@ -9,9 +9,10 @@
 use std::borrow::Cow;
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::Context;
+use swarmrt_scenario::safe_fs::{Open, OutDir};
 
 /// The seed column.
 pub const SEED: &str = "seed";
@@ -213,7 +214,8 @@ impl Table {
 /// failed early (few metrics) cannot decide the columns: failed rows wait until a success
 /// (or [`SweepCsv::finish`]) writes the header.
 pub struct SweepCsv {
-    path: PathBuf,
+    dir: OutDir,
+    name: String,
     keys: Vec<String>,
     header: Option<Vec<String>>,
     file: Option<std::fs::File>,
@@ -223,12 +225,18 @@ pub struct SweepCsv {
 }
 
 impl SweepCsv {
-    /// A writer for `path` with these varied keys. With `existing`, rows go under its header;
-    /// the file is rewritten first to hold exactly its rows (dropping cut lines and the rows
-    /// resume will run again).
-    pub fn open(path: &Path, keys: &[String], existing: Option<&Table>) -> anyhow::Result<Self> {
+    /// A writer for `name` in `dir` (written through the directory's handle) with these
+    /// varied keys. With `existing`, rows go under its header; the file is rewritten first to
+    /// hold exactly its rows (dropping cut lines and the rows resume will run again).
+    pub fn open(
+        dir: &OutDir,
+        name: &str,
+        keys: &[String],
+        existing: Option<&Table>,
+    ) -> anyhow::Result<Self> {
         let mut csv = SweepCsv {
-            path: path.to_path_buf(),
+            dir: dir.try_clone()?,
+            name: name.to_string(),
             keys: keys.to_vec(),
             header: None,
             file: None,
@@ -240,17 +248,19 @@ impl SweepCsv {
             for r in &t.rows {
                 text.push_str(&format_line(r));
             }
-            swarmrt_scenario::safe_fs::write_replace_nofollow(path, text)
-                .with_context(|| format!("writing {}", path.display()))?;
+            csv.dir
+                .write_replace(name, text)
+                .with_context(|| format!("writing {}", csv.dir.join(name).display()))?;
             csv.header = Some(t.header.clone());
-            csv.file = Some(Self::append_to(path)?);
+            csv.file = Some(csv.append_to()?);
         }
         Ok(csv)
     }
 
-    fn append_to(path: &Path) -> anyhow::Result<std::fs::File> {
-        swarmrt_scenario::safe_fs::open_append_nofollow(path)
-            .with_context(|| format!("opening {}", path.display()))
+    fn append_to(&self) -> anyhow::Result<std::fs::File> {
+        self.dir
+            .file(&self.name, Open::Append)
+            .with_context(|| format!("opening {}", self.dir.join(&self.name).display()))
     }
 
     /// Adds a row: written and flushed now, unless it failed and no header exists yet.
@@ -278,12 +288,15 @@ impl SweepCsv {
     /// Writes the header implied by `row` to a new file, then any waiting rows.
     fn start(&mut self, row: &Row) -> anyhow::Result<()> {
         let header = header_for(&self.keys, row);
-        let mut file = swarmrt_scenario::safe_fs::create_nofollow(&self.path)
-            .with_context(|| format!("creating {}", self.path.display()))?;
+        let path = self.dir.join(&self.name);
+        let mut file = self
+            .dir
+            .file(&self.name, Open::Create)
+            .with_context(|| format!("creating {}", path.display()))?;
         file.write_all(format_line(&header).as_bytes())
-            .with_context(|| format!("writing {}", self.path.display()))?;
+            .with_context(|| format!("writing {}", path.display()))?;
         drop(file);
-        self.file = Some(Self::append_to(&self.path)?);
+        self.file = Some(self.append_to()?);
         self.header = Some(header);
         for r in std::mem::take(&mut self.waiting) {
             self.write(&r)?;
@@ -311,7 +324,7 @@ impl SweepCsv {
         }
         file.write_all(format_line(&fields).as_bytes())
             .and_then(|()| file.flush())
-            .with_context(|| format!("writing {}", self.path.display()))
+            .with_context(|| format!("writing {}", self.dir.join(&self.name).display()))
     }
 }
 
@@ -371,7 +384,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("sweep.csv");
         let keys = vec!["a".to_string(), "b".to_string()];
-        let mut csv = SweepCsv::open(&path, &keys, None).unwrap();
+        let mut csv =
+            SweepCsv::open(&OutDir::open(dir.path()).unwrap(), "sweep.csv", &keys, None).unwrap();
         csv.push(row(&["1", "x"], 1, json!({"failed": true, "ticks": 3})))
             .unwrap();
         assert!(
@@ -415,7 +429,13 @@ mod tests {
     fn only_failures_still_get_a_header() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("sweep.csv");
-        let mut csv = SweepCsv::open(&path, &["a".to_string()], None).unwrap();
+        let mut csv = SweepCsv::open(
+            &OutDir::open(dir.path()).unwrap(),
+            "sweep.csv",
+            &["a".to_string()],
+            None,
+        )
+        .unwrap();
         csv.push(row(&["1"], 1, json!({"failed": true}))).unwrap();
         csv.finish().unwrap();
         let (t, _) = Table::read(&path).unwrap();
@@ -430,7 +450,13 @@ mod tests {
         std::fs::write(&victim, "keep").unwrap();
         let path = dir.path().join("sweep.csv");
         std::os::unix::fs::symlink(&victim, &path).unwrap();
-        let mut csv = SweepCsv::open(&path, &["a".to_string()], None).unwrap();
+        let mut csv = SweepCsv::open(
+            &OutDir::open(dir.path()).unwrap(),
+            "sweep.csv",
+            &["a".to_string()],
+            None,
+        )
+        .unwrap();
         let err = csv
             .push(row(&["1"], 1, json!({"failed": false})))
             .unwrap_err();
@@ -453,7 +479,13 @@ mod tests {
         let (t, skipped) = Table::read(&path).unwrap();
         assert_eq!(skipped, 3);
         assert_eq!(t.rows, [["1", "1", "false", "r1"]]);
-        let mut csv = SweepCsv::open(&path, &["a".to_string()], Some(&t)).unwrap();
+        let mut csv = SweepCsv::open(
+            &OutDir::open(dir.path()).unwrap(),
+            "sweep.csv",
+            &["a".to_string()],
+            Some(&t),
+        )
+        .unwrap();
         csv.push(row(&["4"], 1, json!({"failed": false}))).unwrap();
         assert_eq!(
             std::fs::read_to_string(&path).unwrap(),

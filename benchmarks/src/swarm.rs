@@ -467,6 +467,7 @@ fn runtime_run(
     };
     let started = Instant::now();
     let r = (|| -> anyhow::Result<()> {
+        let dir = &swarmrt_scenario::safe_fs::OutDir::create(dir)?;
         let config_path = run_dir::prepare(dir, cfg)?;
         // Read at the world's report of tick SAMPLE_TICK (every observation sample has been
         // written once), in the supervisor's thread (it only delays reading the world's next

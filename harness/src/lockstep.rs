@@ -218,7 +218,7 @@ impl Lockstep {
 /// Returns the world's metrics and whether it was stopped early.
 pub fn run_recorded(
     cfg: &Config,
-    dir: &std::path::Path,
+    dir: &swarmrt_scenario::safe_fs::OutDir,
     mut stop: impl FnMut() -> bool,
     mut progress: impl FnMut(u64),
 ) -> std::io::Result<(swarmrt_world::WorldMetrics, bool)> {

@@ -53,13 +53,19 @@ pub fn ipc_config(run: &RunServices) -> Result<Config, IpcError> {
     Ok(cfg)
 }
 
+/// The run's iceoryx2 config as the text of an `iceoryx2.toml` (what [`write_config_file`]
+/// writes), for a writer that holds its directory's handle.
+pub fn config_file_text(run: &RunServices) -> Result<String, IpcError> {
+    Ok(toml::to_string(&ipc_config(run)?)?)
+}
+
 /// Writes the run's iceoryx2 config as an `iceoryx2.toml` at `path`: iceoryx2's own tools
 /// (`iox2 service list`, `hz`, `subscribe`, `record`) read `config/iceoryx2.toml` from their
 /// working directory, and a robot in another language loads it as its node's config.
 pub fn write_config_file(run: &RunServices, path: &std::path::Path) -> Result<(), IpcError> {
     use std::io::Write;
     use std::os::unix::fs::OpenOptionsExt;
-    let text = toml::to_string(&ipc_config(run)?)?;
+    let text = config_file_text(run)?;
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir)?;
         // The file and the directory it is in are never links (docs/security.md).

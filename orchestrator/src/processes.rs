@@ -13,6 +13,7 @@ use std::process::{ChildStdin, ChildStdout, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+use swarmrt_scenario::safe_fs::OutDir;
 
 use anyhow::{Context, bail};
 use crossbeam_channel::{Receiver, Sender};
@@ -144,7 +145,7 @@ fn send_control(stdin: &mut Option<ChildStdin>, c: &Control) {
 pub fn run(
     cfg: &Config,
     config_path: &Path,
-    dir: &Path,
+    dir: &OutDir,
     interrupt: Receiver<()>,
     progress: impl FnMut(u64),
 ) -> anyhow::Result<ProcessOutcome> {
@@ -168,7 +169,7 @@ pub struct RunOptions<'a> {
 pub fn run_on_hosts(
     cfg: &Config,
     config_path: &Path,
-    dir: &Path,
+    dir: &OutDir,
     opts: &RunOptions,
     interrupt: Receiver<()>,
     mut progress: impl FnMut(u64),
@@ -196,7 +197,7 @@ pub fn run_on_hosts(
 fn supervise(
     cfg: &Config,
     config_path: &Path,
-    dir: &Path,
+    dir: &OutDir,
     opts: &RunOptions,
     run: &RunServices,
     interrupt: Receiver<()>,
@@ -207,8 +208,13 @@ fn supervise(
     // iceoryx2's tools read `config/iceoryx2.toml` from their working directory, so
     // `cd <run dir> && iox2 service list` sees this run; robot programs load it too.
     let ipc_config = dir.join(crate::run_dir::IPC_CONFIG);
-    swarmrt_ipc::write_config_file(run, &ipc_config)
-        .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", ipc_config.display()))?;
+    swarmrt_ipc::config_file_text(run)
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .and_then(|text| {
+            let sub = dir.create_subdir(crate::run_dir::IPC_CONFIG_DIR)?;
+            Ok(sub.write("iceoryx2.toml", text)?)
+        })
+        .with_context(|| format!("cannot write {}", ipc_config.display()))?;
     let (tx, rx) = crossbeam_channel::unbounded::<Msg>();
     // Dropped when this function returns: the relay thread ends with the run, so it never
     // swallows a Ctrl-C meant for a later run in the same process.
@@ -276,7 +282,7 @@ fn world_command(
     world_bin: &Path,
     run: &RunServices,
     config_path: &Path,
-    dir: &Path,
+    dir: &OutDir,
     opts: &RunOptions,
 ) -> std::process::Command {
     let mut world_cmd = child_command(world_bin);
@@ -284,7 +290,10 @@ fn world_command(
         .args(["--run-id", run.run_id(), "--config"])
         .arg(config_path)
         .arg("--out")
-        .arg(dir);
+        .arg(dir.path())
+        // The world refuses any directory but the one checked here.
+        .arg("--out-id")
+        .arg(dir.id().to_string());
     if let Some(h) = opts.hosts {
         world_cmd.arg("--hosts").arg(&h.path);
         world_cmd.arg("--certs").arg(&h.file.certs);
@@ -304,7 +313,7 @@ fn start_world(
     world_bin: &Path,
     run: &RunServices,
     config_path: &Path,
-    dir: &Path,
+    dir: &OutDir,
     opts: &RunOptions,
     tx: &Sender<Msg>,
 ) -> anyhow::Result<(Pid, Option<ChildStdin>)> {

@@ -9,11 +9,10 @@
 
 use std::fs::File;
 use std::io::Write;
-use std::path::Path;
 
 use swarmrt_protocol::records::RadioRow;
 use swarmrt_scenario::Config;
-use swarmrt_scenario::safe_fs::create_nofollow;
+use swarmrt_scenario::safe_fs::{Open, OutDir};
 
 use crate::world::{Event, Robot};
 
@@ -94,12 +93,12 @@ pub struct Recorder {
 
 impl Recorder {
     /// Creates both files (truncating) in `dir` and writes the CSV header (with the aerial
-    /// columns when `aerial`). A symbolic link planted at a record's name is refused, never
-    /// followed ([`swarmrt_scenario::safe_fs`]).
-    pub fn create(dir: &Path, aerial: bool) -> std::io::Result<Recorder> {
-        let mut trajectory = create_nofollow(&dir.join("trajectory.csv"))?;
+    /// columns when `aerial`), through the directory's handle. A symbolic link planted at a
+    /// record's name is refused, never followed ([`swarmrt_scenario::safe_fs`]).
+    pub fn create(dir: &OutDir, aerial: bool) -> std::io::Result<Recorder> {
+        let mut trajectory = dir.file("trajectory.csv", Open::Create)?;
         trajectory.write_all(trajectory_header(aerial).as_bytes())?;
-        let events = create_nofollow(&dir.join("events.jsonl"))?;
+        let events = dir.file("events.jsonl", Open::Create)?;
         Ok(Recorder {
             trajectory,
             events,
@@ -111,10 +110,10 @@ impl Recorder {
 
     /// The records `cfg` asks for: [`Recorder::create`] (aerial columns for aerial robots),
     /// plus `radio.csv` with its header when `scenario.record_radio` is set.
-    pub fn for_run(dir: &Path, cfg: &Config) -> std::io::Result<Recorder> {
+    pub fn for_run(dir: &OutDir, cfg: &Config) -> std::io::Result<Recorder> {
         let mut recorder = Recorder::create(dir, cfg.robots.aerial.is_some())?;
         if cfg.scenario.record_radio {
-            let mut radio = create_nofollow(&dir.join("radio.csv"))?;
+            let mut radio = dir.file("radio.csv", Open::Create)?;
             radio.write_all(RADIO_HEADER.as_bytes())?;
             recorder.radio = Some(radio);
         }
@@ -187,12 +186,12 @@ pub struct RecordWriter {
 
 impl RecordWriter {
     /// Creates the files as [`Recorder::create`] does and starts the writer thread.
-    pub fn create(dir: &Path, aerial: bool) -> std::io::Result<RecordWriter> {
+    pub fn create(dir: &OutDir, aerial: bool) -> std::io::Result<RecordWriter> {
         RecordWriter::start(Recorder::create(dir, aerial)?)
     }
 
     /// Creates the files as [`Recorder::for_run`] does and starts the writer thread.
-    pub fn for_run(dir: &Path, cfg: &Config) -> std::io::Result<RecordWriter> {
+    pub fn for_run(dir: &OutDir, cfg: &Config) -> std::io::Result<RecordWriter> {
         RecordWriter::start(Recorder::for_run(dir, cfg)?)
     }
 
@@ -311,7 +310,8 @@ mod tests {
             std::fs::create_dir(&dir).unwrap();
             let link = dir.join(name);
             std::os::unix::fs::symlink(&victim, &link).unwrap();
-            let e = Recorder::for_run(&dir, &cfg).err().expect("refused");
+            let out = OutDir::open(&dir).unwrap();
+            let e = Recorder::for_run(&out, &cfg).err().expect("refused");
             assert_eq!(
                 e.to_string(),
                 format!(
@@ -319,12 +319,12 @@ mod tests {
                     link.display()
                 )
             );
-            assert!(RecordWriter::for_run(&dir, &cfg).is_err());
+            assert!(RecordWriter::for_run(&out, &cfg).is_err());
             assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep", "{name}");
         }
         // Without links: the usual files and headers.
         let root = tempfile::tempdir().unwrap();
-        drop(Recorder::for_run(root.path(), &cfg).unwrap());
+        drop(Recorder::for_run(&OutDir::open(root.path()).unwrap(), &cfg).unwrap());
         assert_eq!(
             std::fs::read_to_string(root.path().join("radio.csv")).unwrap(),
             RADIO_HEADER

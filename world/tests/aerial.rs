@@ -181,7 +181,11 @@ fn contacts_are_in_3d() {
 #[test]
 fn an_aerial_run_records_the_height_and_a_ground_run_does_not() {
     let tmp = tempfile::tempdir().unwrap();
-    let mut rec = swarmrt_world::records::Recorder::create(tmp.path(), true).unwrap();
+    let mut rec = swarmrt_world::records::Recorder::create(
+        &swarmrt_scenario::safe_fs::OutDir::open(tmp.path()).unwrap(),
+        true,
+    )
+    .unwrap();
     let w = World::new(&config(&[]), VOCABULARY).unwrap();
     rec.record(0, w.robots(), &[]).unwrap();
     let text = std::fs::read_to_string(tmp.path().join("trajectory.csv")).unwrap();
@@ -193,7 +197,11 @@ fn an_aerial_run_records_the_height_and_a_ground_run_does_not() {
     );
     let parsed = swarmrt_protocol::records::Records::parse(&text, "").unwrap();
     assert_eq!(parsed.ticks[0][1].z, 1.0);
-    let mut rec = swarmrt_world::records::Recorder::create(tmp.path(), false).unwrap();
+    let mut rec = swarmrt_world::records::Recorder::create(
+        &swarmrt_scenario::safe_fs::OutDir::open(tmp.path()).unwrap(),
+        false,
+    )
+    .unwrap();
     rec.record(0, w.robots(), &[]).unwrap();
     let text = std::fs::read_to_string(tmp.path().join("trajectory.csv")).unwrap();
     assert!(

@@ -51,11 +51,19 @@ fn run(mut record: impl FnMut(u64, &World, Vec<Event>)) {
 #[test]
 fn the_writer_thread_writes_what_the_recorder_writes() {
     let inline = tempfile::tempdir().unwrap();
-    let mut rec = Recorder::create(inline.path(), false).unwrap();
+    let mut rec = Recorder::create(
+        &swarmrt_scenario::safe_fs::OutDir::open(inline.path()).unwrap(),
+        false,
+    )
+    .unwrap();
     run(|tick, w, events| rec.record(tick, w.robots(), &events).unwrap());
 
     let threaded = tempfile::tempdir().unwrap();
-    let mut writer = RecordWriter::create(threaded.path(), false).unwrap();
+    let mut writer = RecordWriter::create(
+        &swarmrt_scenario::safe_fs::OutDir::open(threaded.path()).unwrap(),
+        false,
+    )
+    .unwrap();
     run(|tick, w, events| writer.record(tick, w.robots(), events).unwrap());
     writer.finish().unwrap();
 
@@ -79,7 +87,11 @@ fn the_writer_thread_writes_what_the_recorder_writes() {
 fn dropping_the_writer_still_writes_everything_handed_over() {
     let dir = tempfile::tempdir().unwrap();
     {
-        let mut writer = RecordWriter::create(dir.path(), false).unwrap();
+        let mut writer = RecordWriter::create(
+            &swarmrt_scenario::safe_fs::OutDir::open(dir.path()).unwrap(),
+            false,
+        )
+        .unwrap();
         run(|tick, w, events| writer.record(tick, w.robots(), events).unwrap());
         // No finish: an error return out of the world shell drops the writer.
     }

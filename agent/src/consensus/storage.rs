@@ -22,12 +22,12 @@
 //!
 //! [`encode_record`], [`scan`] and [`last_good`] are the pure halves, used by the tests.
 
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use swarmrt_scenario::safe_fs;
+use swarmrt_scenario::safe_fs::{Open, OutDir};
 
 use super::log::Log;
 use super::messages::Entry;
@@ -242,9 +242,13 @@ impl std::error::Error for StoreError {
     }
 }
 
-/// One robot's state file, open for appending.
+/// One robot's state file, open for appending, in a directory held open (checked once as a
+/// run directory is, `safe_fs::OutDir`): compaction renames through that handle, so a path
+/// swapped later changes nothing.
 #[derive(Debug)]
 pub struct Store {
+    dir: OutDir,
+    name: String,
     path: PathBuf,
     file: File,
     len: u64,
@@ -257,16 +261,17 @@ impl Store {
     /// tail is cut off. Corruption is refused ([`StoreError::Corrupt`]), and so is a
     /// symbolic link at the file's name.
     pub fn open(dir: &Path, id: u32) -> Result<(Store, Option<Persistent>), StoreError> {
-        let path = dir.join(format!("raft-{id}.state"));
+        let name = format!("raft-{id}.state");
+        let path = dir.join(&name);
         let io = |error| StoreError::Io {
             path: path.clone(),
             error,
         };
-        std::fs::create_dir_all(dir).map_err(io)?;
-        let created = std::fs::symlink_metadata(&path).is_err();
-        let mut file = safe_fs::open_rw_nofollow(&path).map_err(io)?;
+        let out = OutDir::create(dir).map_err(io)?;
+        let created = out.stat(&name).is_none();
+        let mut file = out.file(&name, Open::ReadWrite).map_err(io)?;
         if created {
-            File::open(dir).and_then(|d| d.sync_all()).map_err(io)?;
+            out.handle().sync_all().map_err(io)?;
         }
         let mut bytes = Vec::new();
         file.read_to_end(&mut bytes).map_err(io)?;
@@ -282,6 +287,8 @@ impl Store {
             file.sync_data().map_err(io)?;
         }
         let store = Store {
+            dir: out,
+            name,
             path,
             file,
             len: good as u64,
@@ -313,15 +320,13 @@ impl Store {
 
     /// Replaces the file by one record, atomically.
     fn compact(&mut self, record: &[u8]) -> std::io::Result<()> {
-        let tmp = self.path.with_extension("state.tmp");
-        let mut f = safe_fs::create_nofollow(&tmp)?;
+        let tmp = format!("{}.tmp", self.name);
+        let mut f = self.dir.file(&tmp, Open::Create)?;
         f.write_all(record)?;
         f.sync_all()?;
-        safe_fs::rename_nofollow(&tmp, &self.path)?;
-        if let Some(dir) = self.path.parent() {
-            File::open(dir)?.sync_all()?;
-        }
-        self.file = safe_fs::open_nofollow(&self.path, OpenOptions::new().read(true).write(true))?;
+        self.dir.rename(&tmp, &self.name)?;
+        self.dir.handle().sync_all()?;
+        self.file = self.dir.file(&self.name, Open::ReadWrite)?;
         self.len = record.len() as u64;
         Ok(())
     }

@@ -57,6 +57,7 @@ use serde_json::{Value, json};
 use swarmrt_protocol::RobotState;
 use swarmrt_protocol::records::{Columns, Row};
 use swarmrt_scenario::Config;
+use swarmrt_scenario::safe_fs::{self, Open, OutDir};
 
 /// `foxglove.SceneUpdate`'s JSON Schema (Foxglove SDK, `schemas/jsonschema/`).
 pub const SCENE_UPDATE_SCHEMA: &str = include_str!("schemas/SceneUpdate.json");
@@ -127,23 +128,46 @@ pub struct ChannelCount {
 }
 
 /// Writes the run in `run_dir` to `out` as MCAP (see the module documentation). The file is
-/// written beside `out` and renamed into place, so a failed export leaves no partial file.
+/// written beside `out` (`<out>.partial`) through a handle on `out`'s directory, checked as a
+/// run directory is (`safe_fs::OutDir`), and renamed into place, so a failed export leaves no
+/// partial file. Refused as [`BadInput`]: a symbolic link at either name (never followed,
+/// never replaced) and an `out` that is one of the run's own files (the export would destroy
+/// what it reads).
 pub fn write_mcap(run_dir: &Path, out: &Path) -> anyhow::Result<Summary> {
+    let (parent, name) = out_parts(out)?;
+    let dir = OutDir::create(&parent).map_err(|e| BadInput(format!("--mcap: {e}")))?;
+    refuse_run_file(run_dir, &dir, &name, out)?;
+    let partial = format!("{name}.partial");
+    for n in [&name, &partial] {
+        if dir.stat(n).is_some_and(|e| e.is_symlink) {
+            return Err(BadInput(safe_fs::symlink_error(&dir.join(n)).to_string()).into());
+        }
+    }
     let run = RunInput::read(run_dir)?;
-    let tmp = partial_path(out);
-    let file = swarmrt_scenario::safe_fs::create_nofollow(&tmp)
-        .map_err(|e| BadInput(format!("cannot create {}: {e}", tmp.display())))?;
+    let file = dir.file(&partial, Open::Create).map_err(|e| {
+        BadInput(format!(
+            "cannot create {}: {e}",
+            dir.join(&partial).display()
+        ))
+    })?;
     let result = write_run(&run, BufWriter::new(file));
     let counts = match result {
         Ok(c) => c,
         Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
+            let _ = dir.remove_file(&partial);
             return Err(e.context(format!("writing {}", out.display())));
         }
     };
-    std::fs::rename(&tmp, out)
-        .with_context(|| format!("renaming {} to {}", tmp.display(), out.display()))?;
-    let bytes = std::fs::metadata(out)
+    dir.rename(&partial, &name).with_context(|| {
+        format!(
+            "renaming {} to {}",
+            dir.join(&partial).display(),
+            out.display()
+        )
+    })?;
+    let bytes = dir
+        .file(&name, Open::Read)
+        .and_then(|f| f.metadata())
         .with_context(|| format!("reading back {}", out.display()))?
         .len();
     Ok(Summary {
@@ -156,11 +180,45 @@ pub fn write_mcap(run_dir: &Path, out: &Path) -> anyhow::Result<Summary> {
     })
 }
 
-/// `<out>.partial`, where the file is written before it is renamed to `out`.
-fn partial_path(out: &Path) -> PathBuf {
-    let mut name = out.file_name().unwrap_or_default().to_os_string();
-    name.push(".partial");
-    out.with_file_name(name)
+/// `out`'s directory (`.` for a bare name) and file name.
+fn out_parts(out: &Path) -> anyhow::Result<(PathBuf, String)> {
+    let name = out
+        .file_name()
+        .and_then(|n| n.to_str())
+        .filter(|n| *n != "." && *n != "..")
+        .ok_or_else(|| BadInput(format!("--mcap {}: not a file name", out.display())))?;
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    Ok((parent, name.to_string()))
+}
+
+/// Refuses `name` in `dir` when it is (the same file as) one of the files at the top of the
+/// run directory the export reads: writing there would replace the run's own record.
+fn refuse_run_file(run_dir: &Path, dir: &OutDir, name: &str, out: &Path) -> anyhow::Result<()> {
+    use std::os::unix::fs::MetadataExt;
+    let Ok(target) = dir.file(name, Open::Read).and_then(|f| f.metadata()) else {
+        return Ok(());
+    };
+    let Ok(entries) = std::fs::read_dir(run_dir) else {
+        return Ok(());
+    };
+    for e in entries.flatten() {
+        if let Ok(m) = std::fs::symlink_metadata(e.path())
+            && m.is_file()
+            && (m.dev(), m.ino()) == (target.dev(), target.ino())
+        {
+            return Err(BadInput(format!(
+                "--mcap {}: that is the run's own {}; the export would replace what it reads; \
+                 choose another file",
+                out.display(),
+                e.file_name().to_string_lossy()
+            ))
+            .into());
+        }
+    }
+    Ok(())
 }
 
 /// One line of `events.jsonl`, parsed.

@@ -2,6 +2,9 @@
 
 use std::path::Path;
 
+use anyhow::Context;
+use swarmrt_scenario::safe_fs::OutDir;
+
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -199,18 +202,16 @@ fn draw_figure<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Writes `<stem>.svg` and `<stem>.png` in `dir`: `panels` in a grid of up to two columns.
+/// Writes `<stem>.svg` and `<stem>.png` in `dir` (checked and opened as an
+/// [`OutDir`]): `panels` in a grid of up to two columns.
 pub fn write_figure(dir: &Path, stem: &str, title: &str, panels: &[Panel]) -> anyhow::Result<()> {
     let fig = BenchFigure {
         title,
         panels,
         cols: panels.len().clamp(1, 2),
     };
-    write_svg_png(
-        &fig,
-        &dir.join(format!("{stem}.svg")),
-        &dir.join(format!("{stem}.png")),
-    )
+    let out = OutDir::create(dir).with_context(|| format!("writing into {}", dir.display()))?;
+    write_svg_png(&fig, &out, stem)
 }
 
 struct BenchFigure<'a> {

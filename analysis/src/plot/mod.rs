@@ -13,13 +13,12 @@ pub mod trajectory;
 pub mod tune;
 
 use std::fmt::Display;
-use std::path::Path;
 use std::sync::OnceLock;
 
 use anyhow::{Context, anyhow};
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use swarmrt_scenario::safe_fs;
+use swarmrt_scenario::safe_fs::{self, OutDir};
 
 /// The embedded font, registered with plotters as "sans-serif".
 static FONT_BYTES: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
@@ -65,39 +64,92 @@ pub trait Drawing {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()>;
 }
 
-/// Writes `fig` as an SVG and a PNG of the same size. A symbolic link planted at either name
-/// is refused, never followed (`swarmrt_scenario::safe_fs`): plotters writes a PNG by its
-/// path, following links, so it writes into a directory made for this call alone (0700), and
-/// the PNG is renamed into place from there.
-pub fn write_svg_png(fig: &impl Drawing, svg_path: &Path, png_path: &Path) -> anyhow::Result<()> {
+/// Writes `fig` as `<stem>.svg` and `<stem>.png` of the same size into `dir`. Both are drawn
+/// in memory and written through the directory's handle, each atomically (`<name>.tmp`, then
+/// renamed): a symbolic link planted at either name is refused, never followed, and a plot is
+/// whole or absent.
+pub fn write_svg_png(fig: &impl Drawing, dir: &OutDir, stem: &str) -> anyhow::Result<()> {
+    let (svg_name, png_name) = (format!("{stem}.svg"), format!("{stem}.png"));
     ensure_font()?;
     let size = fig.size();
+    // Refused before drawing, so a planted link costs no rendering.
+    for name in [&svg_name, &png_name] {
+        if dir.stat(name).is_some_and(|e| e.is_symlink) {
+            return Err(safe_fs::symlink_error(&dir.join(name)))
+                .with_context(|| format!("writing {}", dir.join(name).display()));
+        }
+    }
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
         fig.draw(&root)?;
         root.present().map_err(draw_err("svg"))?;
     }
-    safe_fs::write_nofollow(svg_path, svg)
-        .with_context(|| format!("writing {}", svg_path.display()))?;
-    // Refused before drawing, so a planted link costs no rendering; the rename below
-    // refuses it again (and would replace a link, never write through it).
-    safe_fs::refuse_symlink(png_path).with_context(|| format!("writing {}", png_path.display()))?;
-    let parent = png_path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    // An unwritable directory gets a clear I/O error here.
-    let private = safe_fs::PrivateDir::new(parent, "png")
-        .with_context(|| format!("writing {}", png_path.display()))?;
-    let drawn = private.path().join("plot.png");
-    {
-        let root = BitMapBackend::new(&drawn, size).into_drawing_area();
-        fig.draw(&root)?;
-        root.present()
-            .map_err(|e| anyhow!("writing {}: {e}", png_path.display()))?;
-    }
-    safe_fs::rename_nofollow(&drawn, png_path)
-        .with_context(|| format!("writing {}", png_path.display()))?;
+    dir.write_replace(&svg_name, svg)
+        .with_context(|| format!("writing {}", dir.join(&svg_name).display()))?;
+    let png = png_bytes(fig, size)?;
+    dir.write_replace(&png_name, png)
+        .with_context(|| format!("writing {}", dir.join(&png_name).display()))?;
     Ok(())
+}
+
+/// `fig` drawn on an RGB bitmap and encoded as PNG, as plotters' `BitMapBackend::new(path)`
+/// saves one (the image crate's PNG encoder with its defaults), but in memory.
+fn png_bytes(fig: &impl Drawing, (w, h): (u32, u32)) -> anyhow::Result<Vec<u8>> {
+    let mut rgb = vec![0u8; w as usize * h as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+        fig.draw(&root)?;
+        root.present().map_err(draw_err("png"))?;
+    }
+    let img = image::RgbImage::from_raw(w, h, rgb).ok_or_else(|| anyhow!("png buffer size"))?;
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png)
+        .map_err(|e| anyhow!("encoding the png: {e}"))?;
+    Ok(out.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Square;
+
+    impl Drawing for Square {
+        fn size(&self) -> (u32, u32) {
+            (64, 48)
+        }
+        fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+            root.fill(&WHITE).map_err(draw_err("test"))?;
+            root.draw(&Rectangle::new([(8, 8), (40, 30)], TAB10[0].filled()))
+                .map_err(draw_err("test"))?;
+            root.draw_text("x", &("sans-serif", 12).into_font().color(&BLACK), (44, 10))
+                .map_err(draw_err("test"))?;
+            Ok(())
+        }
+    }
+
+    /// The PNG drawn in memory is byte for byte the one plotters saves by path.
+    #[test]
+    fn the_png_drawn_in_memory_is_plotters_own() {
+        ensure_font().unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let by_path = dir.path().join("by-path.png");
+        {
+            let root = BitMapBackend::new(&by_path, Square.size()).into_drawing_area();
+            Square.draw(&root).unwrap();
+            root.present().unwrap();
+        }
+        let out = OutDir::open(dir.path()).unwrap();
+        write_svg_png(&Square, &out, "in-memory").unwrap();
+        assert_eq!(
+            std::fs::read(dir.path().join("in-memory.png")).unwrap(),
+            std::fs::read(&by_path).unwrap()
+        );
+        assert!(
+            std::fs::read_to_string(dir.path().join("in-memory.svg"))
+                .unwrap()
+                .contains("<svg")
+        );
+    }
 }

@@ -1,7 +1,7 @@
 //! A behaviour's per-tick table as a line plot: chosen columns against one, one line per
 //! column and per value of a grouping column (e.g. p'(t) and p̄(t) per flock).
 
-use std::path::Path;
+use swarmrt_scenario::safe_fs::OutDir;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -112,18 +112,13 @@ impl Drawing for Figure {
     }
 }
 
-/// Draws `plot` of `s` as SVG and PNG.
-pub fn write_series_plot(
-    s: &Series,
-    plot: &SeriesPlot,
-    svg: &Path,
-    png: &Path,
-) -> anyhow::Result<()> {
+/// Draws `plot` of `s` as `<plot.file>.svg` and `.png` in `dir`.
+pub fn write_series_plot(s: &Series, plot: &SeriesPlot, dir: &OutDir) -> anyhow::Result<()> {
     let fig = Figure {
         title: plot.title.clone(),
         x_label: plot.x.to_string(),
         y_label: plot.y_label.to_string(),
         lines: lines(s, plot),
     };
-    write_svg_png(&fig, svg, png)
+    write_svg_png(&fig, dir, plot.file)
 }

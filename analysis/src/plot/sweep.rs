@@ -1,7 +1,7 @@
 //! One sweep figure: a metric against a varied key, one line per value of another key, mean
 //! over seeds with a min–max band. Drawn as SVG and PNG with the run plots' embedded font.
 
-use std::path::Path;
+use swarmrt_scenario::safe_fs::OutDir;
 
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
@@ -241,9 +241,9 @@ fn draw_legend<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Writes the figure as SVG and PNG.
-pub fn write(fig: &Figure, svg_path: &Path, png_path: &Path) -> anyhow::Result<()> {
-    write_svg_png(fig, svg_path, png_path)
+/// Writes the figure as `<stem>.svg` and `<stem>.png` in `dir`.
+pub fn write(fig: &Figure, dir: &OutDir, stem: &str) -> anyhow::Result<()> {
+    write_svg_png(fig, dir, stem)
 }
 
 impl Drawing for Figure {
@@ -308,8 +308,8 @@ mod tests {
                 line("0", &[1.0, 2.0, 3.0]),
                 line("8", &[2.0, 2.0, 5.0]),
             ]),
-            &svg,
-            &png,
+            &OutDir::open(dir.path()).unwrap(),
+            "f",
         )
         .unwrap();
         let text = std::fs::read_to_string(&svg).unwrap();
@@ -350,7 +350,8 @@ mod tests {
             }],
         }]);
         fig.x_ticks.truncate(1);
-        write(&fig, &svg, &png).unwrap();
+        write(&fig, &OutDir::open(dir.path()).unwrap(), "f").unwrap();
+        assert!(svg.is_file() && png.is_file());
         assert_eq!(padded(0.0, 0.0, 0.1), (0.0, 1.0));
         assert_eq!(padded(1.0, 3.0, 0.5), (0.0, 4.0));
         assert_eq!(padded(-1.0, 1.0, 0.5), (-2.0, 2.0));

@@ -2,7 +2,7 @@
 //!
 //! Rendered twice with plotters, once as SVG and once as PNG (see [`super`]).
 
-use std::path::Path;
+use swarmrt_scenario::safe_fs::OutDir;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -548,21 +548,23 @@ fn draw_figure<DB: DrawingBackend>(
 }
 
 /// Draws the map (bounds as a frame, obstacles filled grey, goal as a green disc outline), each robot's path in a distinct colour, start positions (hollow circle of robot radius), end positions (filled dot when Active, a red cross when Down or Dead), and a title "<scenario name> seed <seed>: N robots" plus a small legend for the markers. Writes both an SVG and a PNG (about 900 px on the long side, aspect ratio of the map kept, axis labels in metres).
+///
+/// The files are `<stem>.svg` and `<stem>.png` in `dir`.
 pub fn write_trajectory_plots(
     cfg: &Config,
     tracks: &[RobotTrack],
-    svg_path: &Path,
-    png_path: &Path,
+    dir: &OutDir,
+    stem: &str,
 ) -> anyhow::Result<()> {
-    write_figure(cfg, tracks, ("x (m)", "y (m)"), svg_path, png_path)
+    write_figure(cfg, tracks, ("x (m)", "y (m)"), dir, stem)
 }
 
 fn write_figure(
     cfg: &Config,
     tracks: &[RobotTrack],
     axes: (&'static str, &'static str),
-    svg_path: &Path,
-    png_path: &Path,
+    dir: &OutDir,
+    stem: &str,
 ) -> anyhow::Result<()> {
     super::ensure_font()?;
     let fig = TrajectoryFigure {
@@ -571,7 +573,7 @@ fn write_figure(
         tracks,
         axes,
     };
-    write_svg_png(&fig, svg_path, png_path)
+    write_svg_png(&fig, dir, stem)
 }
 
 /// The side view of an aerial run: the same figure in the (y, z) plane, looking west along
@@ -580,16 +582,10 @@ fn write_figure(
 pub fn write_side_view_plots(
     cfg: &Config,
     tracks: &[RobotTrack],
-    svg_path: &Path,
-    png_path: &Path,
+    dir: &OutDir,
+    stem: &str,
 ) -> anyhow::Result<()> {
-    write_figure(
-        &side_view(cfg),
-        tracks,
-        ("y (m)", "z (m)"),
-        svg_path,
-        png_path,
-    )
+    write_figure(&side_view(cfg), tracks, ("y (m)", "z (m)"), dir, stem)
 }
 
 /// `cfg` projected on the (y, z) plane for [`write_side_view_plots`].

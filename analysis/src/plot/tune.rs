@@ -2,7 +2,7 @@
 //! each normalised to its bounds (like Fig. 9-10 of the flocking paper), and the fitness (the
 //! best personal best's mean and the mean of the iteration's new positions).
 
-use std::path::Path;
+use swarmrt_scenario::safe_fs::OutDir;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -48,7 +48,7 @@ const SIZE: (u32, u32) = (960, 560);
 const LEGEND_W: u32 = 260;
 
 /// Writes `best_params.svg`/`.png` and `fitness.svg`/`.png` into `dir`.
-pub fn write_tune_plots(dir: &Path, h: &History) -> anyhow::Result<()> {
+pub fn write_tune_plots(dir: &OutDir, h: &History) -> anyhow::Result<()> {
     let params = Chart {
         title: format!("{}: best parameters per iteration", h.scenario),
         y_label: "share of the bounds (0 = lo, 1 = hi)".into(),
@@ -66,11 +66,7 @@ pub fn write_tune_plots(dir: &Path, h: &History) -> anyhow::Result<()> {
             })
             .collect(),
     };
-    write_svg_png(
-        &params,
-        &dir.join("best_params.svg"),
-        &dir.join("best_params.png"),
-    )?;
+    write_svg_png(&params, dir, "best_params")?;
     let fitness = Chart {
         title: format!("{}: {} per iteration", h.scenario, h.fitness),
         y_label: h.fitness.clone(),
@@ -86,7 +82,7 @@ pub fn write_tune_plots(dir: &Path, h: &History) -> anyhow::Result<()> {
             },
         ],
     };
-    write_svg_png(&fitness, &dir.join("fitness.svg"), &dir.join("fitness.png"))
+    write_svg_png(&fitness, dir, "fitness")
 }
 
 fn finite_points(ys: impl Iterator<Item = f64>) -> Vec<(f64, f64)> {
@@ -193,11 +189,12 @@ mod tests {
             best_fitness: vec![f64::INFINITY],
             mean_fitness: vec![f64::NAN],
         };
-        write_tune_plots(dir.path(), &h).unwrap();
+        let out = OutDir::open(dir.path()).unwrap();
+        write_tune_plots(&out, &h).unwrap();
         h.best_params.push(vec![0.7, 0.1]);
         h.best_fitness.push(412.0);
         h.mean_fitness.push(500.0);
-        write_tune_plots(dir.path(), &h).unwrap();
+        write_tune_plots(&out, &h).unwrap();
         let svg = std::fs::read_to_string(dir.path().join("best_params.svg")).unwrap();
         assert!(svg.contains("behaviour.speed [0.1, 1.5]"), "{svg}");
         let svg = std::fs::read_to_string(dir.path().join("fitness.svg")).unwrap();

@@ -101,10 +101,11 @@ fn fuzz_consensus(a: &ConsensusArgs, interrupt: &Receiver<()>) -> SwarmResult<()
             a.start_seed, a.seeds
         ))
     })?;
-    if let Some(d) = &a.dump {
-        std::fs::create_dir_all(d)
-            .map_err(|e| user(format!("--dump {}: cannot create: {e}", d.display())))?;
-    }
+    // Checked once and written through its handle, as a run directory is.
+    let dump = match &a.dump {
+        Some(d) => Some(crate::run_dir::open_out("--dump", d)?),
+        None => None,
+    };
     select_mutant(a.mutant.as_deref())?;
     let started = Instant::now();
     let pb = progress(a.seeds);
@@ -175,9 +176,10 @@ fn fuzz_consensus(a: &ConsensusArgs, interrupt: &Receiver<()>) -> SwarmResult<()
                     }
                 });
             }
-            if let (Some(dir), Some(ev)) = (&a.dump, &out.events) {
-                let p = dir.join(format!("seed-{seed}.events.jsonl"));
-                swarmrt_scenario::safe_fs::write_nofollow(&p, ev)?;
+            if let (Some(dir), Some(ev)) = (&dump, &out.events) {
+                let name = format!("seed-{seed}.events.jsonl");
+                let p = dir.join(&name);
+                dir.write(&name, ev)?;
                 pb.suspend(|| println!("  notes: {}", p.display()));
             }
         }

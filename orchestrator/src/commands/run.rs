@@ -1,8 +1,8 @@
 //! `swarm run`: resolve the config, run it (processes or in-process), write the run directory.
 
 use std::io::IsTerminal;
-use std::path::Path;
 use std::time::Instant;
+use swarmrt_scenario::safe_fs::OutDir;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
@@ -86,14 +86,21 @@ fn run_with(
     }
     // The directory is locked for the whole run (`_lock` lives until this returns): a second
     // run into it is refused, and so is an earlier run's directory unless --force.
-    let (dir, _lock) = match &args.out {
-        Some(out) => (out.clone(), run_dir::claim(out, args.force)?),
+    // Checked once here (no other user owns it, may write it, or could swap a directory on
+    // the way to it) and written only through its handle from now on.
+    let (out, _lock) = match &args.out {
+        Some(path) => {
+            let out = run_dir::open_out("--out", path)?;
+            let lock = run_dir::claim(&out, args.force)?;
+            (out, lock)
+        }
         None => {
-            let dir = run_dir::default_dir(&cfg)?;
-            let lock = run_dir::claim(&dir, false)?;
-            (dir, lock)
+            let out = run_dir::default_dir(&cfg)?;
+            let lock = run_dir::claim(&out, false)?;
+            (out, lock)
         }
     };
+    let dir = out.path().to_path_buf();
     let hosts = match &args.hosts {
         Some(path) => {
             let file = swarmrt_hosts::HostsFile::load(path, cfg.robots.count)?;
@@ -104,14 +111,14 @@ fn run_with(
         }
         None => None,
     };
-    let config_path = run_dir::prepare(&dir, &cfg)?;
+    let config_path = run_dir::prepare(&out, &cfg)?;
     let hosts = match (hosts, &args.hosts) {
         (Some(file), Some(path)) => {
             // The world reads it from the run directory, which also keeps it with the records.
             let copy = dir.join("hosts.toml");
             // Never through a link planted at the copy's name.
             std::fs::read(path)
-                .and_then(|text| swarmrt_scenario::safe_fs::write_nofollow(&copy, text))
+                .and_then(|text| out.write("hosts.toml", text))
                 .map_err(|e| {
                     SwarmError::Internal(anyhow::anyhow!("cannot copy {}: {e}", path.display()))
                 })?;
@@ -119,7 +126,7 @@ fn run_with(
         }
         _ => None,
     };
-    run_dir::reserve_metrics_room(&dir, cfg.robots.count);
+    run_dir::reserve_metrics_room(&out, cfg.robots.count);
     if let Some(socket) = socket {
         // Reads the records as the run writes them: attaching it changes no record byte.
         let v = super::view::start(&dir, socket)?;
@@ -145,7 +152,7 @@ fn run_with(
     if args.in_process {
         let (world, interrupted) = match swarmrt_harness::lockstep::run_recorded(
             &cfg,
-            &dir,
+            &out,
             || interrupt.try_recv().is_ok(),
             |t| pb.set_position(t),
         ) {
@@ -154,7 +161,7 @@ fn run_with(
             Err(e) => {
                 pb.finish_and_clear();
                 let e = anyhow::Error::from(e).context("run failed writing its records");
-                return Err(failed_early(&dir, &cfg, metrics, started, e));
+                return Err(failed_early(&out, &cfg, metrics, started, e));
             }
         };
         merge(
@@ -170,10 +177,10 @@ fn run_with(
             insecure_link: args.insecure_link,
             realtime: args.realtime,
         };
-        let out = match processes::run_on_hosts(&cfg, &config_path, &dir, &opts, interrupt, |t| {
+        let done = match processes::run_on_hosts(&cfg, &config_path, &out, &opts, interrupt, |t| {
             pb.set_position(t)
         }) {
-            Ok(out) => out,
+            Ok(done) => done,
             Err(e) => {
                 pb.finish_and_clear();
                 // A bad or unreachable host is the user's to fix: one line, exit 2.
@@ -186,20 +193,20 @@ fn run_with(
                             .map(|r| r.to_string())
                     });
                 if let Some(line) = user_line {
-                    let _ = failed_early(&dir, &cfg, metrics, started, e);
+                    let _ = failed_early(&out, &cfg, metrics, started, e);
                     return Err(SwarmError::User(line));
                 }
-                return Err(failed_early(&dir, &cfg, metrics, started, e));
+                return Err(failed_early(&out, &cfg, metrics, started, e));
             }
         };
-        if let Some(w) = out.world_metrics {
+        if let Some(w) = done.world_metrics {
             merge(&mut metrics, w);
         }
-        metrics["run_id"] = json!(out.run_id);
-        metrics["interrupted"] = json!(out.interrupted);
-        metrics["startup_ms"] = json!(out.startup_ms);
-        metrics["processes"] = json!(out.processes);
-        if let Some(h) = &out.hosts {
+        metrics["run_id"] = json!(done.run_id);
+        metrics["interrupted"] = json!(done.interrupted);
+        metrics["startup_ms"] = json!(done.startup_ms);
+        metrics["processes"] = json!(done.processes);
+        if let Some(h) = &done.hosts {
             metrics["hosts"] = h.clone();
             // What the link between hosts trusted (docs/security.md).
             metrics["link"] = serde_json::json!(if args.insecure_link {
@@ -209,7 +216,7 @@ fn run_with(
             });
         }
         metrics["unscheduled_deaths"] = json!(
-            out.unscheduled_deaths
+            done.unscheduled_deaths
                 .iter()
                 .map(|(id, how)| json!({"robot": id, "how": how}))
                 .collect::<Vec<_>>()
@@ -217,12 +224,12 @@ fn run_with(
         // An unscheduled death happens at a wall-clock moment: the run cannot be replayed.
         // A real-time run applies whatever arrived by the wall clock: never replayable.
         metrics["reproducible"] = json!(
-            out.unscheduled_deaths.is_empty()
-                && out.world_failure.is_none()
-                && !out.interrupted
+            done.unscheduled_deaths.is_empty()
+                && done.world_failure.is_none()
+                && !done.interrupted
                 && !args.realtime
         );
-        failure = out.world_failure;
+        failure = done.world_failure;
     }
     pb.finish_and_clear();
     let wall = started.elapsed().as_secs_f64();
@@ -232,7 +239,7 @@ fn run_with(
     metrics["failed"] = json!(failure.is_some());
     if let Some(f) = &failure {
         metrics["failure"] = json!(f);
-        if let Some(last) = trimmed_ticks(&dir, &cfg) {
+        if let Some(last) = trimmed_ticks(&out, &cfg) {
             metrics["ticks"] = json!(last);
         }
     }
@@ -247,22 +254,26 @@ fn run_with(
         let events = std::fs::read_to_string(dir.join("events.jsonl")).unwrap_or_default();
         metrics["consensus"] = swarmrt_analysis::consensus_check::consensus_metrics(&events);
     }
-    if let Err(e) = run_dir::write_metrics(&dir, &metrics) {
+    if let Err(e) = run_dir::write_metrics(&out, &metrics) {
         if failure.is_none() {
             return Err(e.into());
         }
         // A failed run (e.g. a full disk) still reports its failure below.
         tracing::warn!("{e:#}");
     }
-    if let Err(e) = run_dir::write_plots(&dir, &cfg) {
+    if let Err(e) = run_dir::write_plots(&out, &cfg) {
+        // Each plot is written whole or not at all (a temporary file renamed into place).
         tracing::warn!("could not draw the trajectory plot: {e:#}");
-        // A plot cut short (a full disk) is no plot.
-        for name in ["trajectory.svg", "trajectory.png"] {
-            let _ = std::fs::remove_file(dir.join(name));
-        }
     }
-    if let Err(e) = swarmrt_analysis::series::write_all(&cfg, &dir) {
-        tracing::warn!("could not write the behaviour's per-tick tables: {e:#}");
+    match swarmrt_analysis::series::write_all(&cfg, &out) {
+        // Named in the mark, so a later --force knows them as swarm's.
+        Ok(written) if !written.is_empty() => {
+            if let Err(e) = run_dir::note_written(&out, &written) {
+                tracing::warn!("could not note the behaviour's tables in the mark: {e}");
+            }
+        }
+        Ok(_) => {}
+        Err(e) => tracing::warn!("could not write the behaviour's per-tick tables: {e:#}"),
     }
     // A stalled run ended early with robots short of their goal: say so, not only in the file.
     if let Some(stalled) = metrics
@@ -285,7 +296,7 @@ fn run_with(
 /// in-process write failed): trims whatever records it left to the last whole tick, and
 /// leaves a `metrics.json` saying why when there is room for one.
 fn failed_early(
-    dir: &Path,
+    dir: &OutDir,
     cfg: &swarmrt_scenario::Config,
     mut metrics: serde_json::Value,
     started: Instant,
@@ -298,19 +309,17 @@ fn failed_early(
     if let Err(w) = run_dir::write_metrics(dir, &metrics) {
         tracing::warn!("{w:#}");
     }
-    println!("{}", dir.display());
+    println!("{}", dir.path().display());
     SwarmError::Internal(anyhow::anyhow!(
         "{e:#}; records up to the last whole tick are in {}",
-        dir.display()
+        dir.path().display()
     ))
 }
 
 /// Cuts the records back to their last whole tick and returns it (0 without a whole tick,
 /// `None` if there are no records or they could not be trimmed).
-fn trimmed_ticks(dir: &Path, cfg: &swarmrt_scenario::Config) -> Option<u64> {
-    if !dir.join("trajectory.csv").exists() {
-        return None;
-    }
+fn trimmed_ticks(dir: &OutDir, cfg: &swarmrt_scenario::Config) -> Option<u64> {
+    dir.stat("trajectory.csv")?;
     match run_dir::trim_torn_records(dir, cfg.robots.count as usize) {
         Ok(last) => Some(last.unwrap_or(0)),
         Err(e) => {

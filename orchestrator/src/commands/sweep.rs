@@ -10,6 +10,7 @@ use std::path::Path;
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use swarmrt_scenario::Config;
+use swarmrt_scenario::safe_fs::OutDir;
 use swarmrt_world::WorldMetrics;
 
 use crate::cli::SweepArgs;
@@ -114,14 +115,16 @@ fn sweep_with(
         configs.push(cfg);
     }
 
-    let out = match args.out.clone() {
-        Some(out) => out,
-        None => run_dir::unused_dir(&format!(
-            "sweeps/{}-{}",
-            base.scenario.name,
-            run_dir::timestamp()
-        ))?,
+    // Checked once (no other user owns it, may write it, or could swap a directory on the
+    // way to it); sweep.csv, the plots and summary.md are written through its handle.
+    let out_dir = match &args.out {
+        Some(out) => run_dir::open_out("--out", out)?,
+        None => run_dir::unused_dir(
+            Path::new("sweeps"),
+            &format!("{}-{}", base.scenario.name, run_dir::timestamp()),
+        )?,
     };
+    let out = out_dir.path().to_path_buf();
     let csv_path = out.join("sweep.csv");
     check_out_dir(&out)?;
     let existing = if csv_path.exists() {
@@ -146,9 +149,12 @@ fn sweep_with(
     let submitted = slurm::pending_arrays(&out)?;
     check_submitted(&submitted, &spec_of_dir, &configs, &out)?;
 
-    std::fs::create_dir_all(&out)
-        .map_err(|e| SwarmError::User(format!("cannot create {}: {e}", out.display())))?;
-    let mut csv = SweepCsv::open(&csv_path, &plan.keys, existing.as_ref().map(|e| &e.table))?;
+    let mut csv = SweepCsv::open(
+        &out_dir,
+        "sweep.csv",
+        &plan.keys,
+        existing.as_ref().map(|e| &e.table),
+    )?;
     let mut done: BTreeSet<RunKey> = existing.map(|e| e.done).unwrap_or_default();
     let key_of = |r: &RunSpec| (plan.combos[r.combo].clone(), r.seed);
     let swarm = std::env::current_exe()
@@ -161,7 +167,7 @@ fn sweep_with(
     };
     let mut fold = Fold {
         plan: &plan,
-        out: &out,
+        out: &out_dir,
         csv: &mut csv,
         pb: progress_bar(0),
         failures: Vec::new(),
@@ -253,7 +259,7 @@ fn sweep_with(
                     fold.event(todo[*i], ev);
                 }
             });
-            write_detached_command(&out)?;
+            write_detached_command(&out_dir)?;
             let ids: Vec<&str> = arrays.iter().map(|a| a.job_id.as_str()).collect();
             fold.pb.finish_and_clear();
             fold.csv.finish()?;
@@ -292,7 +298,7 @@ fn sweep_with(
         );
     }
 
-    let finished = write_reports(&out, &plan, &base, args, &command, &all_runs)?;
+    let finished = write_reports(&out_dir, &plan, &base, args, &command, &all_runs)?;
     println!("{}", out.display());
 
     if let Some(e) = fold.write_error.take() {
@@ -315,7 +321,7 @@ fn sweep_with(
 /// Folds finished runs into `sweep.csv` and keeps what the end of the sweep reports.
 struct Fold<'a> {
     plan: &'a Plan,
-    out: &'a Path,
+    out: &'a OutDir,
     csv: &'a mut SweepCsv,
     pb: ProgressBar,
     /// `runs/<dir>: reason` of each failed run.
@@ -394,7 +400,7 @@ impl Fold<'_> {
                 if !self.stopping {
                     self.stopped_from_outside.push(rel.clone());
                 }
-                std::fs::remove_dir_all(self.out.join(&rel)).map_err(anyhow::Error::from)
+                remove_run_dir(self.out, &rel).map_err(anyhow::Error::from)
             }
             Outcome::NotStarted => Ok(()),
         };
@@ -467,8 +473,16 @@ fn check_submitted(
     Ok(())
 }
 
+/// Removes the run directory `rel` (`runs/<name>`) of the sweep in `out`, through its handle.
+fn remove_run_dir(out: &OutDir, rel: &str) -> std::io::Result<()> {
+    match rel.split_once('/') {
+        Some((runs, name)) => out.subdir(runs)?.remove_dir_all(name),
+        None => out.remove_dir_all(rel),
+    }
+}
+
 /// Keeps the detached sweep's command (as it would resume, without --detach) for `--collect`.
-fn write_detached_command(out: &Path) -> SwarmResult<()> {
+fn write_detached_command(out: &OutDir) -> SwarmResult<()> {
     let argv: Vec<String> = std::env::args()
         .skip(1)
         .filter(|a| a != "--detach")
@@ -479,10 +493,8 @@ fn write_detached_command(out: &Path) -> SwarmResult<()> {
         argv,
     })
     .map_err(anyhow::Error::from)?;
-    swarmrt_scenario::safe_fs::write_replace_nofollow(
-        &out.join(slurm::SLURM_DIR).join(DETACHED_COMMAND),
-        text,
-    )?;
+    out.create_subdir(slurm::SLURM_DIR)?
+        .write_replace(DETACHED_COMMAND, text)?;
     Ok(())
 }
 
@@ -740,13 +752,14 @@ fn check_metrics(requested: &[String], cfg: &Config, existing: Option<&Table>) -
 /// Draws the plots and writes `summary.md` from every row of `sweep.csv`; returns how many
 /// runs of this plan are finished.
 fn write_reports(
-    out: &Path,
+    out_dir: &OutDir,
     plan: &Plan,
     base: &Config,
     args: &SweepArgs,
     command: &str,
     all_runs: &[RunSpec],
 ) -> SwarmResult<usize> {
+    let out = out_dir.path();
     let csv_path = out.join("sweep.csv");
     if !csv_path.exists() {
         return Ok(0);
@@ -785,10 +798,10 @@ fn write_reports(
         }
         present
     });
-    let plots_dir = out.join("plots");
-    if plots_dir.exists() {
-        std::fs::remove_dir_all(&plots_dir)?;
+    if out_dir.stat("plots").is_some() {
+        out_dir.remove_dir_all("plots")?;
     }
+    let plots_dir = out_dir.create_subdir("plots")?;
     let plots = report::write_plots(&plots_dir, &groups, &base.scenario.name, &metrics)
         .map_err(|e| SwarmError::Internal(e.context("drawing the sweep plots")))?;
     let head = SummaryHead {
@@ -797,7 +810,7 @@ fn write_reports(
         mode: mode(args.pool.in_process),
     };
     let md = report::summary_md(&head, &table, &groups, &metrics, &plots);
-    swarmrt_scenario::safe_fs::write_replace_nofollow(&out.join("summary.md"), md)?;
+    out_dir.write_replace("summary.md", md)?;
     Ok(finished)
 }
 

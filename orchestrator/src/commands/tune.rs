@@ -12,6 +12,7 @@ use serde_json::json;
 use swarmrt_analysis::metrics::lookup;
 use swarmrt_analysis::plot::tune::{History, write_tune_plots};
 use swarmrt_scenario::Config;
+use swarmrt_scenario::safe_fs::OutDir;
 
 use crate::cli::TuneArgs;
 use crate::commands::sweep::{command_line, known_metrics, mode, progress_bar};
@@ -77,17 +78,18 @@ pub fn tune(args: &TuneArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
     let executor = crate::sweep::executor::resolve(&args.pool)?;
     let out = tune.out.clone();
     let cache = open_out(&out, &tune)?;
-    std::fs::create_dir_all(&out)
-        .map_err(|e| SwarmError::User(format!("cannot create {}: {e}", out.display())))?;
-    if !out.join("tune.json").exists() {
+    // Checked once, then tune.csv, tune.json, best.toml and the plots go through its handle.
+    let out_dir = run_dir::open_out("--out", &out)?;
+    if out_dir.stat("tune.json").is_none() {
         write_atomic(
-            &out.join("tune.json"),
+            &out_dir,
+            "tune.json",
             &(serde_json::to_string_pretty(&summary(&tune, None, &[], false))
                 .map_err(anyhow::Error::from)?
                 + "\n"),
         )?;
     }
-    let mut csv = TuneCsv::open(&out.join("tune.csv"), &tune.params)?;
+    let mut csv = TuneCsv::open(&out_dir, "tune.csv", &tune.params)?;
     // Only a tune that was killed leaves Slurm arrays behind (Ctrl-C cancels them): their
     // evaluations are not in tune.csv and run again, so the old tasks go first.
     let stale = crate::sweep::slurm::pending_arrays(&out)?;
@@ -291,7 +293,7 @@ pub fn tune(args: &TuneArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
             pb.finish_and_clear();
             let finished = done.len() + rows.iter().flatten().count();
             if t > 0 {
-                write_outputs(&tune, &pso, &history, &done, false)?;
+                write_outputs(&tune, &out_dir, &pso, &history, &done, false)?;
             }
             println!("{}", out.display());
             if interrupted {
@@ -334,7 +336,14 @@ pub fn tune(args: &TuneArgs, interrupt: crossbeam_channel::Receiver<()>) -> Swar
         csv.rewrite(done.iter().chain(cache.range(next..).map(|(_, r)| r)))?;
         // A replayed iteration changes nothing on disk but the last one's outputs.
         if !jobs.is_empty() || t + 1 == args.iterations {
-            write_outputs(&tune, &pso, &history, &done, t + 1 == args.iterations)?;
+            write_outputs(
+                &tune,
+                &out_dir,
+                &pso,
+                &history,
+                &done,
+                t + 1 == args.iterations,
+            )?;
         }
     }
     pb.finish_and_clear();
@@ -412,11 +421,12 @@ fn check(args: &TuneArgs) -> SwarmResult<Tune<'_>> {
     };
     let out = match args.out.clone() {
         Some(out) => out,
-        None => run_dir::unused_dir(&format!(
-            "runs/tune-{}-{}",
-            base.scenario.name,
-            run_dir::timestamp()
-        ))?,
+        None => run_dir::unused_dir(
+            Path::new("runs"),
+            &format!("tune-{}-{}", base.scenario.name, run_dir::timestamp()),
+        )?
+        .path()
+        .to_path_buf(),
     };
     Ok(Tune {
         args,
@@ -535,12 +545,12 @@ fn summary(tune: &Tune, pso: Option<&Pso>, done: &[EvalRow], complete: bool) -> 
 /// `best.toml`, `tune.json` and the plots, after an iteration.
 fn write_outputs(
     tune: &Tune,
+    out: &OutDir,
     pso: &Pso,
     history: &History,
     done: &[EvalRow],
     complete: bool,
 ) -> SwarmResult<()> {
-    let out = &tune.out;
     if let Some((_, best)) = pso.best() {
         let cfg = load_config(&tune.args.config, &tune.overrides(&best.position))?;
         let head = format!(
@@ -551,11 +561,12 @@ fn write_outputs(
                 .map_or("none".into(), |f| f.to_string()),
             best.count
         );
-        write_atomic(&out.join("best.toml"), &(head + &cfg.to_toml()))?;
+        write_atomic(out, "best.toml", &(head + &cfg.to_toml()))?;
     }
     let s = summary(tune, Some(pso), done, complete);
     write_atomic(
-        &out.join("tune.json"),
+        out,
+        "tune.json",
         &(serde_json::to_string_pretty(&s).map_err(anyhow::Error::from)? + "\n"),
     )?;
     write_tune_plots(out, history)

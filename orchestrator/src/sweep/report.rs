@@ -2,7 +2,7 @@
 //! third and later varied keys), and `summary.md` with mean ± sd per combination.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use swarmrt_scenario::safe_fs::OutDir;
 
 use super::plan::encode;
 use swarmrt_analysis::plot::sweep::{self as figure, Figure, Point, Series};
@@ -173,22 +173,17 @@ pub fn figures(groups: &Groups, scenario: &str, metric: &str) -> Vec<(PlotFile, 
     out
 }
 
-/// Writes every figure into `plots_dir` (created); returns what was written.
+/// Writes every figure into `plots_dir`; returns what was written.
 pub fn write_plots(
-    plots_dir: &Path,
+    plots_dir: &OutDir,
     groups: &Groups,
     scenario: &str,
     metrics: &[String],
 ) -> anyhow::Result<Vec<PlotFile>> {
-    std::fs::create_dir_all(plots_dir)?;
     let mut written = Vec::new();
     for m in metrics {
         for (file, fig) in figures(groups, scenario, m) {
-            figure::write(
-                &fig,
-                &plots_dir.join(format!("{}.svg", file.stem)),
-                &plots_dir.join(format!("{}.png", file.stem)),
-            )?;
+            figure::write(&fig, plots_dir, &file.stem)?;
             written.push(file);
         }
     }

@@ -360,7 +360,7 @@ fn run_one(job: &Job, opts: &PoolOptions, host: &PoolHost, shared: &Shared) -> O
             return Outcome::NotStarted;
         }
         let config = job.dir.join("config.toml");
-        if let Err(e) = prepare(&job.dir, &config, &job.config_toml) {
+        if let Err(e) = prepare(&job.dir, &job.config_toml) {
             return Outcome::Failed {
                 metrics: None,
                 reason: format!("cannot prepare {}: {e:#}", job.dir.display()),
@@ -429,24 +429,25 @@ fn run_one(job: &Job, opts: &PoolOptions, host: &PoolHost, shared: &Shared) -> O
     classify(&job.dir, status, signalled, &tail)
 }
 
-/// Removes what an earlier, unfinished attempt left and writes the resolved config, under the
-/// directory's lock: a directory another run is using is refused, not cleared.
-pub(crate) fn prepare(dir: &Path, config: &Path, toml: &str) -> anyhow::Result<()> {
-    let _lock = run_dir::lock(dir).map_err(|e| anyhow::anyhow!("{e}"))?;
-    for entry in std::fs::read_dir(dir)? {
-        let entry = entry?;
-        if entry.file_name() == run_dir::LOCK_FILE {
+/// Removes what an earlier, unfinished attempt left and writes the resolved config (as
+/// `config.toml`), under the directory's lock and through its handle (checked as every run
+/// directory is): a directory another run is using is refused, not cleared.
+pub(crate) fn prepare(dir: &Path, toml: &str) -> anyhow::Result<()> {
+    let out = run_dir::open_out("the run directory", dir).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let _lock = run_dir::lock(&out).map_err(|e| anyhow::anyhow!("{e}"))?;
+    for entry in out.entries()? {
+        if entry.name == run_dir::LOCK_FILE {
             continue;
         }
-        if entry.file_type()?.is_dir() {
-            std::fs::remove_dir_all(entry.path())?;
+        if entry.is_dir {
+            out.remove_dir_all(&entry.name)?;
         } else {
-            std::fs::remove_file(entry.path())?;
+            out.remove_file(&entry.name)?;
         }
     }
     // Marked as swarm's, so the child's `--force` may clear it.
-    run_dir::mark(dir)?;
-    swarmrt_scenario::safe_fs::write_nofollow(config, toml)?;
+    run_dir::mark(&out)?;
+    out.write("config.toml", toml)?;
     Ok(())
 }
 

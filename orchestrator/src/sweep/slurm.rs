@@ -86,8 +86,7 @@ pub fn prepare_and_submit(
 ) -> (Vec<Array>, Vec<usize>) {
     let mut ready: Vec<usize> = Vec::with_capacity(jobs.len());
     for (i, job) in jobs.iter().enumerate() {
-        let config = job.dir.join("config.toml");
-        match runner::prepare(&job.dir, &config, &job.config_toml) {
+        match runner::prepare(&job.dir, &job.config_toml) {
             Ok(()) => ready.push(i),
             Err(e) => on_event(Event::Finished(
                 i,

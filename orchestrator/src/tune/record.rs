@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use swarmrt_analysis::sweep_csv::{format_line, parse_line};
+use swarmrt_scenario::safe_fs::{Open, OutDir};
 
 use super::pso::Kind;
 use super::space::Param;
@@ -170,25 +171,30 @@ pub fn read(path: &Path, params: &[Param]) -> Result<BTreeMap<u64, EvalRow>, Str
     Ok(rows)
 }
 
-/// `tune.csv` open for appending, one flushed line per row.
+/// `tune.csv` open for appending, one flushed line per row, in a directory held open.
 pub struct TuneCsv {
+    dir: OutDir,
+    name: String,
     path: PathBuf,
     file: std::fs::File,
     header: String,
 }
 
 impl TuneCsv {
-    /// Opens (creating with its header) `path`.
-    pub fn open(path: &Path, params: &[Param]) -> anyhow::Result<TuneCsv> {
+    /// Opens (creating with its header) `name` in `dir`, through the directory's handle.
+    pub fn open(dir: &OutDir, name: &str, params: &[Param]) -> anyhow::Result<TuneCsv> {
         let header = header(params);
-        let fresh = std::fs::metadata(path).map_or(true, |m| m.len() == 0);
-        let mut file = swarmrt_scenario::safe_fs::open_append_nofollow(path)
+        let path = dir.join(name);
+        let mut file = dir
+            .file(name, Open::Append)
             .with_context(|| format!("cannot open {}", path.display()))?;
-        if fresh {
+        if file.metadata()?.len() == 0 {
             file.write_all(header.as_bytes())?;
         }
         Ok(TuneCsv {
-            path: path.to_path_buf(),
+            dir: dir.try_clone()?,
+            name: name.to_string(),
+            path,
             file,
             header,
         })
@@ -209,18 +215,20 @@ impl TuneCsv {
         for r in rows {
             text.push_str(&r.line());
         }
-        write_atomic(&self.path, &text)?;
-        self.file = swarmrt_scenario::safe_fs::open_append_nofollow(&self.path)
+        write_atomic(&self.dir, &self.name, &text)?;
+        self.file = self
+            .dir
+            .file(&self.name, Open::Append)
             .with_context(|| format!("cannot open {}", self.path.display()))?;
         Ok(())
     }
 }
 
-/// Writes `text` to `path` through a temporary file and a rename: never a torn file, and
-/// never through a planted symbolic link.
-pub fn write_atomic(path: &Path, text: &str) -> anyhow::Result<()> {
-    swarmrt_scenario::safe_fs::write_replace_nofollow(path, text)
-        .with_context(|| format!("writing {}", path.display()))
+/// Writes `text` to `name` in `dir` through a temporary file and a rename: never a torn
+/// file, and never through a planted symbolic link.
+pub fn write_atomic(dir: &OutDir, name: &str, text: &str) -> anyhow::Result<()> {
+    dir.write_replace(name, text)
+        .with_context(|| format!("writing {}", dir.join(name).display()))
 }
 
 /// Everything that decides a tune's evaluations and their results; a resume must match it.
@@ -293,7 +301,8 @@ mod tests {
     fn rows_round_trip_and_later_rows_win() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("tune.csv");
-        let mut csv = TuneCsv::open(&path, &params()).unwrap();
+        let out = OutDir::open(dir.path()).unwrap();
+        let mut csv = TuneCsv::open(&out, "tune.csv", &params()).unwrap();
         let row = |eval, status, fitness| EvalRow {
             eval,
             iteration: 0,

@@ -17,6 +17,10 @@ struct Args {
     /// The run directory to write trajectory.csv and events.jsonl into.
     #[arg(long)]
     out: std::path::PathBuf,
+    /// Which directory `--out` must be (`DEV:INO`, as `swarm run` checked it): any other,
+    /// such as a link swapped in at its path, is refused before a record is written.
+    #[arg(long)]
+    out_id: Option<swarmrt_scenario::safe_fs::DirId>,
     /// The run's hosts.toml: the robots it names run on other hosts, reached over Zenoh.
     #[arg(long)]
     hosts: Option<std::path::PathBuf>,
@@ -82,7 +86,18 @@ pub fn main(vocabulary: swarmrt_protocol::Vocabulary) -> std::process::ExitCode 
     } else {
         shell::Mode::LockStep
     };
-    match shell::run(&run, &cfg, &args.out, vocabulary, hosts, mode) {
+    let opened = match args.out_id {
+        Some(id) => swarmrt_scenario::safe_fs::OutDir::open_expected(&args.out, id),
+        None => swarmrt_scenario::safe_fs::OutDir::open(&args.out),
+    };
+    let out = match opened {
+        Ok(out) => out,
+        Err(e) => {
+            tracing::error!("--out {}: {e}", args.out.display());
+            return std::process::ExitCode::from(2);
+        }
+    };
+    match shell::run(&run, &cfg, &out, vocabulary, hosts, mode) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             tracing::error!("world failed: {e}");

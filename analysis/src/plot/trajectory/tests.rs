@@ -92,9 +92,10 @@ const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
 
 fn render(cfg: &Config, tracks: &[RobotTrack]) -> (String, Vec<u8>) {
     let dir = tempfile::tempdir().unwrap();
+    let out = OutDir::open(dir.path()).unwrap();
     let svg = dir.path().join("trajectories.svg");
     let png = dir.path().join("trajectories.png");
-    write_trajectory_plots(cfg, tracks, &svg, &png).unwrap();
+    write_trajectory_plots(cfg, tracks, &out, "trajectories").unwrap();
     (
         std::fs::read_to_string(&svg).unwrap(),
         std::fs::read(&png).unwrap(),
@@ -162,12 +163,23 @@ fn plot_tick_labels() {
 fn plot_unwritable_path_is_an_error() {
     let cfg = config([0.0, 0.0, 20.0, 10.0]);
     let dir = tempfile::tempdir().unwrap();
-    let missing = dir.path().join("no-such-dir");
-    let ok_svg = dir.path().join("ok.svg");
-    let ok_png = dir.path().join("ok.png");
     let tracks = three_tracks(&cfg);
-    assert!(write_trajectory_plots(&cfg, &tracks, &missing.join("a.svg"), &ok_png).is_err());
-    assert!(write_trajectory_plots(&cfg, &tracks, &ok_svg, &missing.join("a.png")).is_err());
+    // A link planted at either name is refused, and its target left alone.
+    let out = OutDir::open(dir.path()).unwrap();
+    let target = dir.path().join("target");
+    std::fs::write(&target, "keep").unwrap();
+    for name in ["a.svg", "b.png"] {
+        std::os::unix::fs::symlink(&target, dir.path().join(name)).unwrap();
+    }
+    assert!(write_trajectory_plots(&cfg, &tracks, &out, "a").is_err());
+    assert!(write_trajectory_plots(&cfg, &tracks, &out, "b").is_err());
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "keep");
+    // A directory gone since it was opened takes no plot.
+    let gone = dir.path().join("gone");
+    std::fs::create_dir(&gone).unwrap();
+    let out = OutDir::open(&gone).unwrap();
+    std::fs::remove_dir(&gone).unwrap();
+    assert!(write_trajectory_plots(&cfg, &tracks, &out, "c").is_err());
 }
 
 #[test]
