@@ -30,9 +30,15 @@ pub fn workspace() -> PathBuf {
 /// (the robot's test hooks among them). A plain `cargo build -p ...` resolved features without
 /// them, so it compiled most of the graph a second time (syn, serde, hyper... all differ) on
 /// a fresh clone; this build is the test build's own, and fresh when the suite runs whole.
+///
+/// With `SWARMRT_TEST_BIN_DIR` set, its binaries are used as they are (nothing is built): to
+/// run a test against another build, e.g. an older commit's, and see it fail there.
 pub fn bin_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
+        if let Some(dir) = std::env::var_os("SWARMRT_TEST_BIN_DIR") {
+            return PathBuf::from(dir);
+        }
         // target/<profile>/deps/<test binary>
         let exe = std::env::current_exe().unwrap();
         let profile_dir = exe.parent().unwrap().parent().unwrap().to_path_buf();
