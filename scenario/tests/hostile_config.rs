@@ -1,7 +1,7 @@
 //! No panic reaches a user from loading a config (issue 48): hostile mutations of the real
 //! configs and hostile `--set` values load or are refused with one short line naming the
-//! key; a config that loads writes a resolved config that loads again to the same config
-//! (the world and robot processes load that one). The bounds of issue 48 (file size, name
+//! key; a config that loads writes a resolved config that loads again and writes the same
+//! text (the world and robot processes load that one). The bounds of issue 48 (file size, name
 //! length, vertex and obstacle counts, degenerate polygons, `robots.program = []`) each have
 //! a test of their own here, through [`Config::load`], the path every command shares.
 
@@ -31,8 +31,12 @@ proptest! {
     fn hostile_configs_and_sets_load_or_are_refused_in_one_short_line(case in hostile::case()) {
         match Config::from_toml_str(&case.name, &case.text, &case.overrides) {
             Ok(cfg) => {
-                let again = Config::from_toml_str("config.toml", &cfg.to_toml(), &[]);
-                prop_assert_eq!(again.as_ref(), Ok(&cfg), "{:?}", case.what);
+                // Compared as text: `[behaviour]` is opaque here, and may hold a NaN the
+                // behaviour refuses later (`tests/tests/config_fuzz.rs` goes that far).
+                let resolved = cfg.to_toml();
+                let again = Config::from_toml_str("config.toml", &resolved, &[])
+                    .map(|c| c.to_toml());
+                prop_assert_eq!(again, Ok(resolved), "{:?}", case.what);
             }
             Err(e) => assert_one_short_line(&e.to_string())?,
         }

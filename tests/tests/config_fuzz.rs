@@ -5,6 +5,8 @@
 //! The mutations are those of `agent/tests/config_fuzz.rs`, from a fixed seed; explore
 //! further with `PROPTEST_CASES` and `PROPTEST_RNG_SEED`.
 
+#[path = "../../scenario/tests/common/hostile.rs"]
+mod hostile;
 #[path = "../../agent/tests/common/mutate.rs"]
 mod mutate;
 
@@ -15,6 +17,7 @@ use std::time::Duration;
 use mutate::{geometry_override, mutated_config, override_arg, renumbered_config, runner};
 use proptest::prelude::*;
 use swarmrt_agent::registry;
+use swarmrt_scenario::{Config, ConfigError};
 use swarmrt_tests::swarm;
 use swarmrt_world::World;
 
@@ -57,6 +60,60 @@ proptest! {
             && let Err(e) = World::new(&cfg, registry::VOCABULARY)
         {
             prop_assert!(!e.key.is_empty(), "{e:?}");
+        }
+    }
+}
+
+/// What `swarm check` does to a scenario, step by step as
+/// `swarmrt_harness::config::load_run_config` does it (this crate does not depend on the
+/// harness): read the file with its `--set`s and validate, resolve `[behaviour]`, build the
+/// world (its map and start layout), find the robot programs from `cwd`.
+fn load_as_swarm_check(path: &Path, set: &[String], cwd: &Path) -> Result<Config, ConfigError> {
+    let file = path.display().to_string();
+    let mut cfg = registry::load(path, set)?;
+    World::new(&cfg, registry::VOCABULARY)
+        .map_err(|e| ConfigError::new(&file, e.key, e.message))?;
+    swarmrt_scenario::program::resolve(&mut cfg, &file, cwd)?;
+    Ok(cfg)
+}
+
+proptest! {
+    #![proptest_config(hostile::runner(300))]
+
+    /// Issue 48: hostile mutations of the real configs and hostile `--set`s (extreme and
+    /// non-finite numbers, long strings, wrong types, arrays past their bounds, degenerate
+    /// obstacles) pass everything `swarm check` does, or are refused in one short line naming
+    /// the file; never a panic. What is accepted, the world and robot processes accept: the
+    /// resolved config, written as a run directory holds it, loads and builds again.
+    #[test]
+    fn hostile_configs_pass_every_check_or_are_refused_in_one_short_line(case in hostile::case()) {
+        let tmp = tempfile::tempdir().unwrap();
+        let path = tmp.path().join(&case.name);
+        std::fs::write(&path, &case.text).unwrap();
+        match load_as_swarm_check(&path, &case.overrides, tmp.path()) {
+            Ok(cfg) => {
+                let resolved = tmp.path().join("config.toml");
+                std::fs::write(&resolved, cfg.to_toml()).unwrap();
+                let (_, mut again) = swarmrt_scenario::process::load_run("00ab", &resolved)
+                    .map_err(|e| TestCaseError::fail(format!("{:?}: world refused {e}", case.what)))?;
+                registry::resolve(&mut again, "config.toml")
+                    .map_err(|e| TestCaseError::fail(format!("{:?}: robots refused {e}", case.what)))?;
+                prop_assert!(World::new(&again, registry::VOCABULARY).is_ok(), "{:?}", case.what);
+                for id in [0, again.robots.count - 1] {
+                    prop_assert!(registry::brain(&again, id).is_ok(), "{:?}", case.what);
+                }
+            }
+            Err(e) => {
+                let shown = e.to_string();
+                let n = shown.chars().count();
+                prop_assert!(n <= 2048, "{:?}: {n} characters", case.what);
+                prop_assert!(!shown.chars().any(char::is_control), "{:?}: {shown:?}", case.what);
+                prop_assert!(
+                    e.file == path.display().to_string() || e.file == "--set",
+                    "{:?}: {shown}",
+                    case.what
+                );
+            }
         }
     }
 }
