@@ -263,3 +263,54 @@ fn a_directory_that_is_not_a_run_is_refused_in_one_line() {
     }
     assert!(!file.exists());
 }
+
+/// c0b8b90: `--mcap RUN/trajectory.csv` overwrote the run's own record, and a link planted
+/// at the `--mcap` name was replaced. Now both are refused in one line and left as they were.
+#[test]
+fn an_export_onto_the_runs_own_file_or_a_planted_link_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("run");
+    run_config(
+        "configs/goto_simple.toml",
+        &run,
+        &["--ticks", "5", "--in-process"],
+    );
+    for name in [
+        "trajectory.csv",
+        "events.jsonl",
+        "config.toml",
+        "metrics.json",
+    ] {
+        let target = run.join(name);
+        let before = std::fs::read(&target).unwrap();
+        let out = export(&run, &target);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{name}: {err}");
+        assert!(
+            err.contains(&format!("that is the run's own {name}")),
+            "{err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "one line: {err}");
+        assert_eq!(std::fs::read(&target).unwrap(), before, "{name} changed");
+    }
+    // A hard link elsewhere to a record is the same file: refused too.
+    let alias = tmp.path().join("alias.mcap");
+    std::fs::hard_link(run.join("trajectory.csv"), &alias).unwrap();
+    assert_eq!(export(&run, &alias).status.code(), Some(2));
+    // A symbolic link planted at the export's name: refused, neither it nor its target changed.
+    let victim = tmp.path().join("victim");
+    std::fs::write(&victim, "keep").unwrap();
+    let planted = tmp.path().join("planted.mcap");
+    std::os::unix::fs::symlink(&victim, &planted).unwrap();
+    let out = export(&run, &planted);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("is a symbolic link; refusing to follow it"),
+        "{err}"
+    );
+    assert!(std::fs::symlink_metadata(&planted).unwrap().is_symlink());
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep");
+    // And an ordinary new file is written.
+    assert_ok(&export(&run, &tmp.path().join("ok.mcap")));
+}

@@ -147,14 +147,25 @@ fn force_clears_only_a_directory_swarm_marked() {
         mark.starts_with("swarmrt run directory (swarmrt "),
         "{mark}"
     );
-    std::fs::write(dir.join("stale.csv"), "stale").unwrap();
+    // c0b8b90 removed every file of a marked directory, a user's own beside the run too. A
+    // file swarm never wrote makes --force refuse now, and nothing goes.
+    std::fs::write(dir.join("notes.csv"), "mine").unwrap();
+    let before = snapshot(&dir);
+    assert_refused(
+        &short_run(&dir, &["--seed", "4", "--force"]),
+        &format!(
+            "--out {}: --force replaces only what an earlier run wrote, and this holds \
+             notes.csv, which swarm did not write; nothing was removed; move it or choose \
+             another directory",
+            dir.display()
+        ),
+    );
+    // A refused run writes nothing, not even its pid into the lock.
+    assert_eq!(snapshot(&dir), before);
+    std::fs::remove_file(dir.join("notes.csv")).unwrap();
     let out = short_run(&dir, &["--seed", "4", "--force"]);
     assert_ok(&out);
     assert_eq!(metrics(&dir)["seed"], 4);
-    assert!(
-        !dir.join("stale.csv").exists(),
-        "the earlier run's files went"
-    );
     assert!(dir.join(".swarmrt-run").is_file(), "and the mark stays");
 
     // Without the mark (a run directory from before marks, or a copy), --force refuses.

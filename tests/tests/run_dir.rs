@@ -132,8 +132,15 @@ fn force_replaces_a_finished_runs_directory() {
     let dir = tmp.path().join("run");
     assert_ok(&short_run(&dir, &["--seed", "3"]));
     let first = snapshot(&dir);
-    // A stray file of the earlier run that the new one does not write must not survive.
+    // A table of the earlier run that the new one does not write must not survive: as a
+    // behaviour's table is, it is named in the mark (`wrote <name>`).
     std::fs::write(dir.join("formation.csv"), "stale").unwrap();
+    let mark = std::fs::read_to_string(dir.join(".swarmrt-run")).unwrap();
+    std::fs::write(
+        dir.join(".swarmrt-run"),
+        format!("{mark}wrote formation.csv\n"),
+    )
+    .unwrap();
 
     let out = short_run(&dir, &["--seed", "4", "--force"]);
     assert_ok(&out);
@@ -446,4 +453,28 @@ fn a_full_disk_leaves_whole_ticks_and_a_failed_metrics_json() {
         // Room for the next run.
         std::fs::remove_dir_all(&dir).unwrap();
     }
+}
+
+/// c0b8b90: `--out /proc/self` and `--out /dev` exited 1, as an internal failure; a path the
+/// user gave that cannot hold a run is theirs to fix: one line, exit 2, nothing written.
+#[test]
+fn an_out_that_cannot_hold_a_run_is_a_user_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("a-file");
+    std::fs::write(&file, "x").unwrap();
+    let too_long = tmp.path().join("x".repeat(300));
+    for out in [
+        Path::new("/proc/self").to_path_buf(),
+        Path::new("/dev").to_path_buf(),
+        file.clone(),
+        file.join("below"),
+        too_long,
+    ] {
+        let o = short_run(&out, &[]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "--out {}: {err}", out.display());
+        assert_eq!(err.trim().lines().count(), 1, "one line: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
 }
