@@ -388,6 +388,12 @@ impl Down {
 }
 
 impl Up {
+    /// True when a message whose first byte is `kind` is a [`Up::Resent`] (the world gives
+    /// those places of their own before decoding anything).
+    pub fn is_resent(kind: u8) -> bool {
+        kind == UP_RESENT
+    }
+
     /// The message as bytes.
     pub fn encode(&self) -> Vec<u8> {
         let mut w = W(Vec::new());
@@ -525,6 +531,8 @@ mod tests {
             hellos: vec![(6, hello)],
         };
         assert_eq!(Up::decode(&back.encode(), 3).unwrap(), back);
+        assert!(Up::is_resent(back.encode()[0]));
+        assert!(!Up::is_resent(Up::Commands(Vec::new()).encode()[0]));
         assert!(
             Up::decode(&back.encode(), 2).is_err(),
             "past the batch bound"

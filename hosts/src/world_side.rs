@@ -5,7 +5,8 @@
 //! The queue is shared, but each host has a share of it ([`host_quota`]): a message holds
 //! a place in its host's share until the world is done with it (its [`Heard`] is dropped).
 //! A host past its share has its own messages dropped and counted against it, so one host's
-//! flood never costs another host a message.
+//! flood never costs another host a message. Its answers to the world's resend requests have
+//! a few places of their own ([`RESENT_RESERVE`]), so a flood of batches does not drown them.
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -90,11 +91,15 @@ pub fn host_quota(robots: usize) -> usize {
     64 + 2 * robots
 }
 
-/// The world's queue: every host's share, and a place for each host's `Lost`.
+/// Places of each host's share kept for its [`Up::Resent`] answers: the world asks at most
+/// once per [`RESEND_EVERY`] and reads everything before asking again.
+pub const RESENT_RESERVE: usize = 4;
+
+/// The world's queue: every host's share and resend places, and a place for its `Lost`.
 pub fn queue_capacity(file: &HostsFile) -> usize {
     file.hosts
         .iter()
-        .map(|h| host_quota(h.robots.len()) + 1)
+        .map(|h| host_quota(h.robots.len()) + RESENT_RESERVE + 1)
         .sum()
 }
 
@@ -105,23 +110,31 @@ struct Share {
     quota: usize,
     /// Its messages queued or being handled by the world.
     waiting: AtomicUsize,
+    /// The same, of its `Resent` answers (at most [`RESENT_RESERVE`]).
+    resent_waiting: AtomicUsize,
     dropped: AtomicU64,
     /// Its `Lost` has been queued (once is enough).
     lost: AtomicBool,
 }
 
 impl Share {
-    /// A place for one more message, unless the host's share is full: then the message is
-    /// counted as dropped (and the first drop is logged, once).
-    fn take(self: &Arc<Share>) -> Option<Slot> {
+    /// A place for one more message (a `Resent` answer when `resent`), unless the host's
+    /// share is full: then the message is counted as dropped (the first drop is logged, once).
+    fn take(self: &Arc<Share>, resent: bool) -> Option<Slot> {
         let quota = self.quota;
-        let free = self
-            .waiting
-            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |w| {
-                (w < quota).then_some(w + 1)
-            });
+        let (count, limit) = if resent {
+            (&self.resent_waiting, RESENT_RESERVE)
+        } else {
+            (&self.waiting, quota)
+        };
+        let free = count.fetch_update(Ordering::AcqRel, Ordering::Acquire, |w| {
+            (w < limit).then_some(w + 1)
+        });
         if free.is_ok() {
-            return Some(Slot(self.clone()));
+            return Some(Slot {
+                share: self.clone(),
+                resent,
+            });
         }
         if self.dropped.fetch_add(1, Ordering::Relaxed) == 0 {
             tracing::warn!(
@@ -136,11 +149,19 @@ impl Share {
 /// A queued message's place in its host's share of the world's queue; dropping it (with
 /// the [`Heard`] that holds it) gives the place back.
 #[derive(Debug)]
-pub struct Slot(Arc<Share>);
+pub struct Slot {
+    share: Arc<Share>,
+    resent: bool,
+}
 
 impl Drop for Slot {
     fn drop(&mut self) {
-        self.0.waiting.fetch_sub(1, Ordering::AcqRel);
+        let count = if self.resent {
+            &self.share.resent_waiting
+        } else {
+            &self.share.waiting
+        };
+        count.fetch_sub(1, Ordering::AcqRel);
     }
 }
 
@@ -264,6 +285,7 @@ impl WorldLink {
                 host: h.name.clone(),
                 quota: host_quota(h.robots.len()),
                 waiting: AtomicUsize::new(0),
+                resent_waiting: AtomicUsize::new(0),
                 dropped: AtomicU64::new(0),
                 lost: AtomicBool::new(false),
             });
@@ -271,8 +293,10 @@ impl WorldLink {
             let sub = session
                 .declare_subscriber(link::up_key(run_id, &h.name))
                 .callback(move |sample| {
-                    // A full share drops the message before it is even decoded.
-                    let Some(slot) = share.take() else {
+                    // A full share drops the message before it is even decoded; its kind is
+                    // its first byte.
+                    let first = sample.payload().slices().next().and_then(|b| b.first());
+                    let Some(slot) = share.take(first.is_some_and(|&k| Up::is_resent(k))) else {
                         return;
                     };
                     let bytes = sample.payload().to_bytes();

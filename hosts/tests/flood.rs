@@ -159,3 +159,42 @@ fn a_flooding_host_loses_only_its_own_messages_and_is_counted_for_them() {
     let _ = b.close().wait();
     world.close();
 }
+
+/// What the world asked a flooding host to resend has places of its own: with the host's
+/// share full of its own flood, its `Resent` answer still reaches the world, so a lost batch
+/// costs that host a resend, not its robots.
+#[test]
+fn a_resend_reaches_the_world_through_a_share_full_of_flood() {
+    let tmp = tempfile::tempdir().unwrap();
+    let port = free_port();
+    let file = hosts(tmp.path(), port);
+    certs::generate(&file, &file.certs).unwrap();
+    let (mut world, heard) = WorldLink::open(&file, "f100d").unwrap();
+    let (a, a_up) = host(&file, "a", port);
+    until_heard(&a_up, &heard, 0);
+    let flood = 5_000;
+    let empty = Up::Commands(Vec::new()).encode();
+    for _ in 0..flood {
+        a_up.put(empty.clone()).wait().unwrap();
+    }
+    settled(&mut world, &heard, flood);
+    assert!(world.traffic()[0].dropped > 0, "a's share is full");
+    let resent = Up::Resent {
+        tick: 7,
+        answers: vec![(2, swarmrt_protocol::Command::act(2, 7))],
+        hellos: Vec::new(),
+    };
+    a_up.put(resent.encode()).wait().unwrap();
+    // Behind a's queued flood, the resend arrives.
+    let since = Instant::now();
+    loop {
+        match heard.recv_timeout(LIMIT) {
+            Ok(Heard::Up { msg, .. }) if msg == resent => break,
+            Ok(_) => assert!(since.elapsed() < LIMIT),
+            Err(_) => panic!("the resend never arrived"),
+        }
+    }
+    drop(a_up);
+    let _ = a.close().wait();
+    world.close();
+}

@@ -246,12 +246,21 @@ fn a_planted_link_or_a_taken_name_makes_swarm_certs_write_nothing() {
             && !err.contains('\n'),
         "{err}"
     );
-    assert_eq!(listing(&file.certs), vec!["ca.key"], "something was written");
+    assert_eq!(
+        listing(&file.certs),
+        vec!["ca.key"],
+        "something was written"
+    );
     assert_eq!(
         std::fs::read_to_string(&victim).unwrap(),
         "the victim's own file\n"
     );
-    assert!(std::fs::symlink_metadata(&planted).unwrap().file_type().is_symlink());
+    assert!(
+        std::fs::symlink_metadata(&planted)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
 
     // The last name of the set taken by a file: still nothing written, the file unchanged.
     std::fs::remove_file(&planted).unwrap();

@@ -94,7 +94,10 @@ fn refused_handshakes_are_counted_and_logged_in_one_line_a_minute() {
             &format!("{:?}", certs::ca_cert(&file.certs).display().to_string()),
         )
         .unwrap();
-        assert!(zenoh::open(c).wait().is_err(), "round {round}: no certificate got in");
+        assert!(
+            zenoh::open(c).wait().is_err(),
+            "round {round}: no certificate got in"
+        );
         let ca = certs::ca_cert(&other_file.certs);
         let (cert, key) = certs::host_pair(&other_file.certs, "a");
         let tls = Tls::Mutual {

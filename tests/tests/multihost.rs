@@ -54,6 +54,12 @@ fn hosts_file_with(
 
 /// `swarm args...` on host 0.
 fn swarm_on_host0(lab: &Lab, args: &[&str]) -> std::process::Child {
+    swarm_on_host0_with(lab, args, &[])
+}
+
+/// [`swarm_on_host0`] with environment variables `env` (which reach every host's
+/// `swarm-host` through the launchers).
+fn swarm_on_host0_with(lab: &Lab, args: &[&str], env: &[(&str, &str)]) -> std::process::Child {
     let l = lab.launcher(0);
     // nsenter -m starts in /; the configs are relative to the workspace.
     let wd = format!("--wd={}", workspace().display());
@@ -62,6 +68,7 @@ fn swarm_on_host0(lab: &Lab, args: &[&str]) -> std::process::Child {
         .args([wd.as_str(), "--"])
         .arg(swarm_bin())
         .args(args)
+        .envs(env.iter().copied())
         .current_dir(workspace())
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
@@ -497,4 +504,122 @@ fn an_insecure_link_must_be_asked_for_and_a_stranger_never_gets_in() {
         );
     }
     assert_hosts_clean(&lab);
+}
+
+/// Issue 48's flood, end to end: host h1, holding its own valid certificate, floods valid
+/// empty batches on its own up key for the whole run (the test build's
+/// `SWARMRT_TEST_HOST_FLOOD`), while h2's robots keep answering. Before, the world's one
+/// shared queue dropped batches of h2, whose robots were then declared unresponsive and dead.
+/// Now no robot dies, neither h2's nor h1's own (what the world dropped of h1 it asks h1 to
+/// resend), the flood is counted against h1 alone with one warning line, and the run writes
+/// the bytes of the same run on one host.
+#[test]
+fn a_host_flooding_its_own_key_costs_no_robot_its_life() {
+    let lab = lab();
+    let tmp = tempfile::tempdir().unwrap();
+    // 80 ticks: the flood takes most of both cores (a tick ~0.5 s, 200 ticks took 108 s).
+    // At c0b8b90 the first dropped batch of h2 cost its robots their lives 30 s later
+    // (`unresponsive_ms`), well inside the run; now no robot may die at all.
+    let common = ["--ticks", "80", "--set", "scenario.stop_when_done=false"];
+    let one = tmp.path().join("one");
+    let mut args = vec![
+        "run",
+        "configs/flocking_crossing.toml",
+        "--out",
+        one.to_str().unwrap(),
+    ];
+    args.extend_from_slice(&common);
+    assert_ok(&swarmrt_tests::swarm(&args, LIMIT));
+
+    let hosts = hosts_file(&lab, tmp.path(), &[3, 3], "");
+    let flooded = tmp.path().join("flooded");
+    let mut args = vec![
+        "run",
+        "configs/flocking_crossing.toml",
+        "--hosts",
+        hosts.to_str().unwrap(),
+        "--out",
+        flooded.to_str().unwrap(),
+    ];
+    args.extend_from_slice(&common);
+    let started = Instant::now();
+    let o = swarmrt_tests::wait_with_watchdog(
+        swarm_on_host0_with(&lab, &args, &[("SWARMRT_TEST_HOST_FLOOD", "h1")]),
+        LIMIT,
+    );
+    let took = started.elapsed();
+    assert_ok(&o);
+    let m = metrics(&flooded);
+    assert_eq!(m["unscheduled_deaths"], serde_json::json!([]), "{m}");
+    assert_eq!(m["reproducible"], true, "{m}");
+    let link = m["shell"]["link"].as_array().unwrap();
+    let of = |name: &str| link.iter().find(|l| l["host"] == name).unwrap();
+    assert!(of("h1")["dropped"].as_u64().unwrap() > 0, "h1 flooded: {m}");
+    assert_eq!(
+        of("h2")["dropped"],
+        0,
+        "h2 lost messages to h1's flood: {m}"
+    );
+    assert_eq!(of("h2")["resends"], 0, "{m}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    let warned = err
+        .lines()
+        .filter(|l| l.contains("sends faster than the world reads"))
+        .collect::<Vec<_>>();
+    assert!(
+        warned.len() == 1 && warned[0].contains("host h1"),
+        "one warning line, naming h1: {err}"
+    );
+    for f in ["trajectory.csv", "events.jsonl"] {
+        assert!(
+            bytes(&one, f) == bytes(&flooded, f),
+            "{f} differs between one host and three under a flood"
+        );
+    }
+    eprintln!(
+        "flooded run {took:.1?}; h1: dropped {}, resends {}, recovered {}",
+        of("h1")["dropped"],
+        of("h1")["resends"],
+        of("h1")["recovered"]
+    );
+    assert_hosts_clean(&lab);
+}
+
+/// `swarm certs` with a link planted at `ca.key` (issue 48): before, it wrote `ca.pem`, then
+/// stopped at the link with a bare "File exists". Now it refuses in one line naming the link,
+/// exits 2, writes nothing, and leaves the link's target as it was. No namespaces needed.
+#[test]
+fn swarm_certs_refuses_a_planted_link_in_one_line_and_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let hosts = tmp.path().join("hosts.toml");
+    std::fs::write(
+        &hosts,
+        "[world]\nlisten = \"quic/10.0.0.1:7447\"\n\n[[host]]\nname = \"h1\"\nlauncher = [\"ssh\", \"h1\"]\nrobots = 2\n",
+    )
+    .unwrap();
+    let certs = tmp.path().join("certs");
+    std::fs::create_dir(&certs).unwrap();
+    let victim = tmp.path().join("victim");
+    std::fs::write(&victim, "the victim's own file\n").unwrap();
+    std::os::unix::fs::symlink(&victim, certs.join("ca.key")).unwrap();
+    let o = swarmrt_tests::swarm(&["certs", hosts.to_str().unwrap()], LIMIT);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert!(
+        lines.len() == 1
+            && lines[0].starts_with("error:")
+            && lines[0].contains(&certs.join("ca.key").display().to_string())
+            && lines[0].contains("is a symbolic link"),
+        "{err}"
+    );
+    let left: Vec<String> = std::fs::read_dir(&certs)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(left, vec!["ca.key"], "swarm certs left files behind");
+    assert_eq!(
+        std::fs::read_to_string(&victim).unwrap(),
+        "the victim's own file\n"
+    );
 }

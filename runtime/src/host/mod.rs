@@ -312,6 +312,7 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
         robots: robots.clone(),
         expect: BTreeSet::new(),
         batch: Vec::new(),
+        lane: false,
         tick: 0,
         answered: BTreeMap::new(),
         hellos: BTreeMap::new(),
@@ -415,8 +416,11 @@ struct Relay<'a> {
     robots: std::ops::Range<u32>,
     /// The robots of this host the world waits for in the current tick.
     expect: BTreeSet<u32>,
-    /// Commands not sent up yet.
-    batch: Vec<(u32, Command)>,
+    /// Commands not sent up yet, each with whether it is a hello that bound its robot.
+    batch: Vec<(u32, Command, bool)>,
+    /// The world asked for a resend this tick (it is dropping this host's messages): the
+    /// rest of the tick goes up as `Resent`, which has places of its own at the world.
+    lane: bool,
     /// The tick of the slots last received.
     tick: u64,
     /// Each robot's first command since those slots (its answer), kept for a resend.
@@ -486,11 +490,11 @@ impl Relay<'_> {
                 Sample::Robot(robot) => {
                     self.expect.remove(&robot);
                     self.answered.entry(robot).or_insert(c);
-                    self.batch.push((robot, c));
+                    self.batch.push((robot, c, false));
                 }
                 Sample::Hello(robot) => {
                     self.hellos.insert(robot, c);
-                    self.batch.push((robot, c));
+                    self.batch.push((robot, c, true));
                     self.flush_each = true;
                 }
                 Sample::BadHello | Sample::Unknown => stats.unknown_sender += 1,
@@ -502,7 +506,19 @@ impl Relay<'_> {
             }
             stats.batches_up += 1;
             stats.commands_up += self.batch.len() as u64;
-            send(&Up::Commands(std::mem::take(&mut self.batch)), stats)?;
+            let batch = std::mem::take(&mut self.batch);
+            let msg = if self.lane {
+                let (hellos, answers): (Vec<_>, Vec<_>) = batch.into_iter().partition(|e| e.2);
+                let strip = |v: Vec<(u32, Command, bool)>| v.into_iter().map(|(r, c, _)| (r, c));
+                Up::Resent {
+                    tick: self.tick,
+                    answers: strip(answers).collect(),
+                    hellos: strip(hellos).collect(),
+                }
+            } else {
+                Up::Commands(batch.into_iter().map(|(r, c, _)| (r, c)).collect())
+            };
+            send(&msg, stats)?;
         }
         Ok(())
     }
@@ -537,6 +553,7 @@ impl Relay<'_> {
                     .collect();
                 self.tick = tick;
                 self.answered.clear();
+                self.lane = false;
                 self.tick_at = Instant::now();
                 self.flush_each = false;
             }
@@ -589,6 +606,9 @@ impl Relay<'_> {
                 .collect()
         };
         let answers = if tick == self.tick {
+            // The world is dropping what this host sends: the rest of the tick takes the lane
+            // the world keeps for resends.
+            self.lane = true;
             held(&self.answered, answers)
         } else {
             Vec::new()
@@ -686,10 +706,10 @@ impl Flood {
         if std::env::var(FLOOD_ENV).ok()? != host {
             return None;
         }
+        // Not express: Zenoh batches the small messages, as fast as the link goes.
         let up = session
             .declare_publisher(link::up_key(run_id, host))
             .congestion_control(CongestionControl::Block)
-            .express(true)
             .wait()
             .ok()?;
         let stop = std::sync::Arc::new(AtomicBool::new(false));

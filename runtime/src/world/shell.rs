@@ -353,13 +353,13 @@ impl Remote {
     ) -> Result<(), IpcError> {
         let now = Instant::now();
         for i in 0..self.link.len() {
-            if self.lost[i] || !self.joined[i] {
-                continue;
-            }
             let range = self.link.robots(i);
             let awaiting = hellos.awaiting_set();
-            let waiting = pending.range(range.clone()).next().is_some()
-                || awaiting.range(range.clone()).next().is_some();
+            // A lost host, or one not joined yet, is asked nothing (and owes no wake-up).
+            let waiting = !self.lost[i]
+                && self.joined[i]
+                && (pending.range(range.clone()).next().is_some()
+                    || awaiting.range(range.clone()).next().is_some());
             if self.resends.due(i, self.link.dropped(i), waiting, now) {
                 let answers: Vec<u32> = pending.range(range.clone()).copied().collect();
                 let awaited: Vec<u32> = awaiting.range(range).copied().collect();
