@@ -75,7 +75,12 @@ fn a_bad_obstacle_names_file_and_key() {
     );
     assert_eq!(e.file, path.display().to_string(), "{e}");
     assert_eq!(e.key, "map.polygons[0].points", "{e}");
-    assert_eq!(e.message, "expected a polygon with non-zero area", "{e}");
+    assert_eq!(
+        e.message,
+        "expected a polygon of at least 3 distinct points, not all on one line, whose convex \
+         hull has an area of at least 1e-6 m², got its 3 distinct points on one line",
+        "{e}"
+    );
 }
 
 #[test]

@@ -166,23 +166,44 @@ fn coord() -> BoxedStrategy<f64> {
     .boxed()
 }
 
-/// A polygon obstacle: few to many points from [`coord`], now and then past the vertex bound.
+/// A polygon obstacle: few to many points from [`coord`], now and then past the vertex
+/// bound; or one of the shapes a convex hull cannot be built from, placed anywhere: one point
+/// repeated, points on a line, a triangle so small its sides square to zero or nearly.
 fn polygon() -> BoxedStrategy<toml::Value> {
     let sizes = prop_oneof![8 => 0usize..7, 1 => Just(256usize), 1 => Just(257usize)];
-    (sizes, prop::collection::vec((coord(), coord()), 7))
-        .prop_map(|(n, pool)| {
-            let points: Vec<toml::Value> = (0..n)
-                .map(|i| {
-                    let (x, y) = pool[i % pool.len()];
+    let scattered = (sizes, prop::collection::vec((coord(), coord()), 7)).prop_map(|(n, pool)| {
+        (0..n)
+            .map(|i| {
+                if i < pool.len() {
+                    pool[i]
+                } else {
                     // Past the pool, points walk a circle so a large polygon has an area.
-                    let (x, y) = if i < pool.len() {
-                        (x, y)
-                    } else {
-                        let a = i as f64 * std::f64::consts::TAU / n as f64;
-                        (5.0 + a.cos(), 5.0 + a.sin())
-                    };
-                    toml::Value::Array(vec![float(x), float(y)])
-                })
+                    let a = i as f64 * std::f64::consts::TAU / n as f64;
+                    (5.0 + a.cos(), 5.0 + a.sin())
+                }
+            })
+            .collect::<Vec<_>>()
+    });
+    let at = || (-2.0f64..14.0).prop_map(|v| (v * 4.0).round() / 4.0);
+    let degenerate = prop_oneof![
+        (at(), at(), 1usize..6).prop_map(|(x, y, n)| vec![(x, y); n]),
+        (at(), at(), at(), at(), 3usize..6).prop_map(|(x, y, dx, dy, n)| {
+            (0..n)
+                .map(|i| (x + i as f64 * dx, y + i as f64 * dy))
+                .collect()
+        }),
+        (
+            at(),
+            at(),
+            prop::sample::select(&[5e-324, 1e-310, 1e-160, 1e-8, 1e-4][..])
+        )
+            .prop_map(|(x, y, s)| vec![(x, y), (x + s, y), (x, y + s)]),
+    ];
+    prop_oneof![2 => scattered, 1 => degenerate]
+        .prop_map(|points| {
+            let points = points
+                .into_iter()
+                .map(|(x, y)| toml::Value::Array(vec![float(x), float(y)]))
                 .collect();
             let mut t = toml::Table::new();
             t.insert("points".into(), toml::Value::Array(points));
