@@ -1,9 +1,12 @@
-//! Opening the files swarm writes in a run directory without following a symbolic link
-//! planted at their name (`O_NOFOLLOW`): a link there is refused with an error naming the
-//! path, and whatever it points to is left untouched.
+//! Writing where no other local user can redirect it. [`OutDir`] is a directory swarm writes
+//! into (a run's `--out`, a sweep's, a tune's, an export's folder), checked once against
+//! other users ([`check_path`]) and then used only through the handle opened at the check, so
+//! a path swapped for a link afterwards changes nothing. Files are opened without following a
+//! link planted at their name (`O_NOFOLLOW`): a link there is refused with an error naming
+//! the path, and whatever it points to is left untouched.
 //!
-//! Only the last component of a path is checked: a run directory given as `--out` may itself
-//! be reached through a link, as the user chose; the files swarm creates inside it may not.
+//! The path-based openers below check only the last component, for files outside an
+//! [`OutDir`].
 //! A file replaced by rename ([`write_replace_nofollow`]) is safe either way (`rename(2)`
 //! replaces a link at the destination, never what it points to), and is refused too, so a
 //! planted link is reported rather than silently dropped.
