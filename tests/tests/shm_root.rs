@@ -253,7 +253,8 @@ fn a_base_owned_by_another_user_is_refused() {
     let out = run_with_base(&base.0, &tmp.path().join("run"), &[]);
     let line = format!(
         "refusing the shared-memory root {}: owned by uid {other}, not by you (uid {}); \
-         remove it or ask its owner",
+         another user made it first, and only they or root can remove it; set \
+         SWARMRT_SHM_BASE to a directory of your own",
         base.0.display(),
         euid()
     );
@@ -360,4 +361,21 @@ fn a_base_too_long_for_iceoryx2s_socket_paths_is_refused() {
     );
     assert!(err.lines().any(|l| l.contains(&line)), "{line:?}:\n{err}");
     assert!(!base.0.exists(), "nothing is made");
+}
+
+/// A base that cannot be made (under /proc) is the user's to fix: one line naming it, exit 2
+/// (c0b8b90 exited 1, as for an internal failure).
+#[test]
+fn a_base_that_cannot_be_made_is_a_user_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let base = Path::new("/proc/swarmrt-no-such-base");
+    let out = run_with_base(base, &tmp.path().join("run"), &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert!(
+        lines.len() == 1
+            && lines[0].contains("cannot create the shared-memory root /proc/swarmrt-no-such-base"),
+        "{err}"
+    );
 }
