@@ -252,7 +252,7 @@ fn a_base_owned_by_another_user_is_refused() {
     std::os::unix::fs::chown(&base.0, Some(other), None).unwrap();
     let out = run_with_base(&base.0, &tmp.path().join("run"), &[]);
     let line = format!(
-        "refusing the shared-memory root {}: owned by uid {other}, not by you (uid {}); \
+        "refusing the shared-memory root {}: owned by uid {other}, not by you (uid {}): \
          another user made it first, and only they or root can remove it; set \
          SWARMRT_SHM_BASE to a directory of your own",
         base.0.display(),
