@@ -115,6 +115,15 @@ fn sweep_with(
         configs.push(cfg);
     }
 
+    // A --metric no run reports is refused before the directory is made; an existing
+    // sweep's columns may add to what is known, so with one it is checked below instead.
+    if args
+        .out
+        .as_ref()
+        .is_none_or(|o| !o.join("sweep.csv").exists())
+    {
+        check_metrics(&args.metric, &configs[0], None)?;
+    }
     // Checked once (no other user owns it, may write it, or could swap a directory on the
     // way to it); sweep.csv, the plots and summary.md are written through its handle.
     let out_dir = match &args.out {
