@@ -147,11 +147,9 @@ fn sweep_with(
     } else {
         None
     };
-    check_metrics(
-        &args.metric,
-        &configs[0],
-        existing.as_ref().map(|e| &e.table),
-    )?;
+    if let Some(e) = &existing {
+        check_metrics(&args.metric, &configs[0], Some(&e.table))?;
+    }
     let all_runs = plan.runs();
     let spec_of_dir: BTreeMap<String, RunSpec> =
         all_runs.iter().map(|r| (plan.dir_name(*r), *r)).collect();
