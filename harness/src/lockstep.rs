@@ -3,6 +3,7 @@
 
 use swarmrt_agent::Agent;
 use swarmrt_agent::consensus::raft::{MutantScope, Persistent};
+use swarmrt_protocol::control::ProcessFault;
 use swarmrt_protocol::{Command, Observation, RobotState};
 use swarmrt_scenario::Config;
 use swarmrt_world::map::MapError;
@@ -110,7 +111,7 @@ impl Lockstep {
     /// `think` would compute, the same bytes whichever thread computed them.
     pub fn observe(&mut self) {
         for signal in self.world.take_signals() {
-            if let ProcessSignal::Restart { robot, incarnation } = signal {
+            if let ProcessSignal::Fault(ProcessFault::Restart { robot, incarnation }) = signal {
                 let r = robot as usize;
                 self.agents[r] = match self.stored[r].clone() {
                     Some(state) => Agent::restore(&self.cfg, robot, state, incarnation),

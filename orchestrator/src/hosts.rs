@@ -15,7 +15,7 @@ use std::time::Duration;
 use anyhow::Context;
 use crossbeam_channel::Sender;
 use swarmrt_hosts::HostsFile;
-use swarmrt_protocol::control::{HostControl, HostReport};
+use swarmrt_protocol::control::{HostControl, HostReport, ProcessFault};
 
 use swarmrt_scenario::process::{child_command, signal_all};
 
@@ -192,10 +192,10 @@ impl Remotes {
     /// Sends `c` to host `host` (a host that is gone is skipped).
     pub fn order(&mut self, host: usize, c: &HostControl) {
         match *c {
-            HostControl::Kill { robot } => {
+            HostControl::Fault(ProcessFault::Kill { robot }) => {
                 self.killed.insert(robot);
             }
-            HostControl::Restart { robot, .. } => {
+            HostControl::Fault(ProcessFault::Restart { robot, .. }) => {
                 self.killed.remove(&robot);
             }
             _ => {}

@@ -17,7 +17,7 @@ use swarmrt_scenario::safe_fs::OutDir;
 
 use anyhow::{Context, bail};
 use crossbeam_channel::{Receiver, Sender};
-use swarmrt_protocol::control::{Control, HostControl, HostReport, WorldReport};
+use swarmrt_protocol::control::{Control, HostControl, HostReport, ProcessFault, WorldReport};
 use swarmrt_protocol::services::RunServices;
 use swarmrt_scenario::Config;
 
@@ -538,18 +538,7 @@ impl LocalRun {
             Msg::Report(WorldReport::Tick { tick }) => progress(tick),
             // The schedule's faults: the world counts a killed robot dead already; the real
             // signal exercises the crash path.
-            Msg::Report(WorldReport::Kill { robot }) => {
-                self.sup.kill(robot).iter().for_each(launch::send)
-            }
-            Msg::Report(WorldReport::Freeze { robot }) => {
-                self.sup.freeze(robot).iter().for_each(launch::send)
-            }
-            Msg::Report(WorldReport::Thaw { robot }) => {
-                self.sup.thaw(robot).iter().for_each(launch::send)
-            }
-            Msg::Report(WorldReport::Restart { robot, incarnation }) => {
-                self.restart(robot, incarnation)
-            }
+            Msg::Report(WorldReport::Fault(fault)) => self.carry_out_fault(fault),
             Msg::Report(WorldReport::Unresponsive { robot, waited_ms }) => {
                 // Unscheduled: recorded as a death when the reaper reports the exit.
                 if let Some(order) = self.sup.kill_hung(robot) {
@@ -601,9 +590,17 @@ impl LocalRun {
         false
     }
 
-    /// A scheduled restart: the old process is killed on the order, a fresh one started.
-    fn restart(&mut self, robot: u32, incarnation: u32) {
-        for order in self.sup.restart(robot, incarnation) {
+    /// A fault of the schedule on a robot of this host: the world counts a killed robot dead
+    /// already; the real signal exercises the crash path. A restart's old process is killed
+    /// on the order and a fresh one started.
+    fn carry_out_fault(&mut self, fault: ProcessFault) {
+        let orders = match fault {
+            ProcessFault::Kill { robot } => self.sup.kill(robot).into_iter().collect(),
+            ProcessFault::Freeze { robot } => self.sup.freeze(robot).into_iter().collect(),
+            ProcessFault::Thaw { robot } => self.sup.thaw(robot).into_iter().collect(),
+            ProcessFault::Restart { robot, incarnation } => self.sup.restart(robot, incarnation),
+        };
+        for order in orders {
             let Order::Spawn { robot, incarnation } = order else {
                 launch::send(&order);
                 continue;
@@ -797,16 +794,13 @@ impl LocalRun {
 
 /// The order for a remote robot's swarm-host that a world report asks for, if any.
 fn remote_order(r: &WorldReport) -> Option<(u32, HostControl)> {
-    Some(match *r {
-        WorldReport::Kill { robot } => (robot, HostControl::Kill { robot }),
-        WorldReport::Freeze { robot } => (robot, HostControl::Freeze { robot }),
-        WorldReport::Thaw { robot } => (robot, HostControl::Thaw { robot }),
-        WorldReport::Restart { robot, incarnation } => {
-            (robot, HostControl::Restart { robot, incarnation })
+    match *r {
+        WorldReport::Fault(fault) => Some((fault.robot(), HostControl::Fault(fault))),
+        WorldReport::Unresponsive { robot, .. } => {
+            Some((robot, HostControl::Fault(ProcessFault::Kill { robot })))
         }
-        WorldReport::Unresponsive { robot, .. } => (robot, HostControl::Kill { robot }),
-        _ => return None,
-    })
+        _ => None,
+    }
 }
 
 /// A host is gone (`why`; `None` when it had finished or was lost already): before tick 0

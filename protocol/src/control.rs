@@ -25,6 +25,49 @@ pub enum Control {
     Stop,
 }
 
+/// What is done to a robot's process: the one vocabulary of faults, from the world's
+/// schedule (which applied it to its own state already) through the orchestrator to the
+/// supervisor of the robot's host, which sends the real signal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "fault", rename_all = "snake_case")]
+pub enum ProcessFault {
+    /// SIGKILL it: it is dead from this tick.
+    Kill {
+        /// The robot.
+        robot: u32,
+    },
+    /// SIGSTOP it: it is frozen from this tick; the world no longer waits for it.
+    Freeze {
+        /// The robot.
+        robot: u32,
+    },
+    /// SIGCONT it: the world waits for its answer again.
+    Thaw {
+        /// The robot.
+        robot: u32,
+    },
+    /// SIGKILL it and start a fresh process with the same id; the world waits for the fresh
+    /// process's hello before the robot rejoins.
+    Restart {
+        /// The robot.
+        robot: u32,
+        /// 1 for the first restart of this robot, 2 for the second, ...
+        incarnation: u32,
+    },
+}
+
+impl ProcessFault {
+    /// The robot whose process it is.
+    pub fn robot(&self) -> u32 {
+        match *self {
+            ProcessFault::Kill { robot }
+            | ProcessFault::Freeze { robot }
+            | ProcessFault::Thaw { robot }
+            | ProcessFault::Restart { robot, .. } => robot,
+        }
+    }
+}
+
 /// World -> orchestrator (stdout).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "report", rename_all = "snake_case")]
@@ -36,31 +79,10 @@ pub enum WorldReport {
         /// Milliseconds from `Listening` until the last hello.
         startup_ms: u64,
     },
-    /// The fault schedule killed this robot at the tick boundary: SIGKILL its process. The
-    /// world already counts it dead, so the run replays whatever the signal's timing.
-    Kill {
-        /// The robot.
-        robot: u32,
-    },
-    /// The fault schedule froze this robot: SIGSTOP its process. The world no longer waits
-    /// for it.
-    Freeze {
-        /// The robot.
-        robot: u32,
-    },
-    /// The freeze ended: SIGCONT the process; the world waits for its answer again.
-    Thaw {
-        /// The robot.
-        robot: u32,
-    },
-    /// The fault schedule restarts this robot: SIGKILL its process and start a fresh one
-    /// with the same id. The world waits for the fresh process's hello before it rejoins.
-    Restart {
-        /// The robot.
-        robot: u32,
-        /// 1 for the first restart of this robot, 2 for the second, ...
-        incarnation: u32,
-    },
+    /// The fault schedule did this to a robot's process at the tick boundary: carry it out.
+    /// The world already applied it to its own state, so the run replays whatever the
+    /// signal's timing.
+    Fault(ProcessFault),
     /// A robot answered nothing for `scenario.unresponsive_ms`: the world marked it dead;
     /// SIGKILL its process. An unscheduled death: the run is no longer reproducible.
     Unresponsive {
@@ -120,28 +142,9 @@ pub enum HostControl {
         /// The config as TOML.
         toml: String,
     },
-    /// SIGKILL the robot's process (a scheduled kill, or an unresponsive robot).
-    Kill {
-        /// The robot.
-        robot: u32,
-    },
-    /// SIGSTOP the robot's process.
-    Freeze {
-        /// The robot.
-        robot: u32,
-    },
-    /// SIGCONT the robot's process.
-    Thaw {
-        /// The robot.
-        robot: u32,
-    },
-    /// SIGKILL the robot's process and start a fresh one.
-    Restart {
-        /// The robot.
-        robot: u32,
-        /// The fresh process's incarnation.
-        incarnation: u32,
-    },
+    /// A fault to carry out on one of the host's robots: one the schedule ordered, or the
+    /// kill of a robot the world found unresponsive.
+    Fault(ProcessFault),
     /// End now: robots are told to exit, then the host cleans up and exits.
     Stop,
 }

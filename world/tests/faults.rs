@@ -2,6 +2,7 @@
 //! effect at exactly their tick boundary and hand the shell the signals to send.
 
 use swarmrt_agent::registry::VOCABULARY;
+use swarmrt_protocol::control::ProcessFault;
 use swarmrt_protocol::records::FaultKind;
 use swarmrt_protocol::{Command, Observation, RobotState};
 use swarmrt_scenario::Config;
@@ -73,7 +74,10 @@ fn a_frozen_robot_stands_still_from_its_first_tick_and_resumes_at_the_last() {
     }
     assert_eq!(
         signals,
-        vec![(5, ProcessSignal::Freeze(1)), (10, ProcessSignal::Thaw(1))]
+        vec![
+            (5, ProcessSignal::Fault(ProcessFault::Freeze { robot: 1 })),
+            (10, ProcessSignal::Fault(ProcessFault::Thaw { robot: 1 }))
+        ]
     );
     for (t, state, _) in &xs {
         let frozen = (5..10).contains(t);
@@ -123,18 +127,18 @@ fn a_restart_takes_the_robot_offline_and_brings_it_back_fresh() {
         vec![
             (
                 4,
-                ProcessSignal::Restart {
+                ProcessSignal::Fault(ProcessFault::Restart {
                     robot: 2,
                     incarnation: 1
-                }
+                })
             ),
             (7, ProcessSignal::Rejoin(2)),
             (
                 20,
-                ProcessSignal::Restart {
+                ProcessSignal::Fault(ProcessFault::Restart {
                     robot: 2,
                     incarnation: 2
-                }
+                })
             ),
             // down_ticks defaults to 10.
             (30, ProcessSignal::Rejoin(2)),
@@ -170,7 +174,10 @@ fn a_kill_ends_a_freeze_and_a_dead_robot_is_neither_frozen_nor_restarted() {
     }
     assert_eq!(
         signals,
-        vec![ProcessSignal::Freeze(0), ProcessSignal::Kill(0)],
+        vec![
+            ProcessSignal::Fault(ProcessFault::Freeze { robot: 0 }),
+            ProcessSignal::Fault(ProcessFault::Kill { robot: 0 })
+        ],
         "no thaw for a dead robot, no restart or freeze of one"
     );
     assert_eq!(w.robots()[0].state, RobotState::Dead);
@@ -240,23 +247,31 @@ fn random_faults_follow_the_seed_and_their_rate() {
     assert_ne!(a, run(8).0, "another seed, other faults");
     let kills = a
         .iter()
-        .filter(|s| matches!(s.1, ProcessSignal::Kill(_)))
+        .filter(|s| matches!(s.1, ProcessSignal::Fault(ProcessFault::Kill { .. })))
         .count() as f64;
     let freezes: Vec<_> = a
         .iter()
         .filter_map(|s| match s.1 {
-            ProcessSignal::Freeze(r) => Some((s.0, r)),
+            ProcessSignal::Fault(ProcessFault::Freeze { robot: r }) => Some((s.0, r)),
             _ => None,
         })
         .collect();
     // Each thaw comes exactly freeze_ticks later.
     for (t, r) in &freezes {
         if t + 7 < 2000
-            && !a
-                .iter()
-                .any(|s| s.1 == ProcessSignal::Kill(*r) && s.0 > *t && s.0 <= t + 7)
+            && !a.iter().any(|s| {
+                s.1 == ProcessSignal::Fault(ProcessFault::Kill { robot: *r })
+                    && s.0 > *t
+                    && s.0 <= t + 7
+            })
         {
-            assert!(a.contains(&(t + 7, ProcessSignal::Thaw(*r))), "{t} {r}");
+            assert!(
+                a.contains(&(
+                    t + 7,
+                    ProcessSignal::Fault(ProcessFault::Thaw { robot: *r })
+                )),
+                "{t} {r}"
+            );
         }
     }
     // Counts within 5 standard deviations of a Bernoulli draw per running robot-tick (a

@@ -20,7 +20,7 @@ use iceoryx2::prelude::*;
 use serde::Serialize;
 use swarmrt_ipc::cleanup;
 use swarmrt_ipc::{self as ipc, IpcError};
-use swarmrt_protocol::control::{HostControl, HostReport};
+use swarmrt_protocol::control::{HostControl, HostReport, ProcessFault};
 use swarmrt_protocol::services::{RunServices, valid_run_id};
 use swarmrt_protocol::{Command, Observation, ObservationHeader, PROTOCOL_VERSION};
 use zenoh::Wait;
@@ -632,18 +632,25 @@ impl Relay<'_> {
     /// A fault the orchestrator ordered for one of this host's robots.
     fn order(&mut self, c: HostControl) -> std::io::Result<()> {
         match c {
-            HostControl::Kill { robot } => {
-                self.hellos.remove(&robot);
-                self.bindings.forget(robot);
-                self.sup.kill(robot).iter().for_each(launch::send);
-            }
-            HostControl::Freeze { robot } => self.sup.freeze(robot).iter().for_each(launch::send),
-            HostControl::Thaw { robot } => self.sup.thaw(robot).iter().for_each(launch::send),
-            HostControl::Restart { robot, incarnation } => {
-                self.hellos.remove(&robot);
-                self.bindings.expect_hello(robot);
-                for order in self.sup.restart(robot, incarnation) {
-                    self.carry_out(order)?;
+            HostControl::Fault(fault) => {
+                let robot = fault.robot();
+                match fault {
+                    ProcessFault::Kill { .. } => {
+                        self.hellos.remove(&robot);
+                        self.bindings.forget(robot);
+                        self.sup.kill(robot).iter().for_each(launch::send);
+                    }
+                    ProcessFault::Freeze { .. } => {
+                        self.sup.freeze(robot).iter().for_each(launch::send)
+                    }
+                    ProcessFault::Thaw { .. } => self.sup.thaw(robot).iter().for_each(launch::send),
+                    ProcessFault::Restart { incarnation, .. } => {
+                        self.hellos.remove(&robot);
+                        self.bindings.expect_hello(robot);
+                        for order in self.sup.restart(robot, incarnation) {
+                            self.carry_out(order)?;
+                        }
+                    }
                 }
             }
             HostControl::Stop | HostControl::Config { .. } => {}

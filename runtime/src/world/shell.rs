@@ -15,7 +15,7 @@ use swarmrt_hosts::HostsFile;
 use swarmrt_hosts::wire::{Down, Up, encode_tick};
 use swarmrt_hosts::world_side::{Heard, HostTraffic, Resends, WorldLink};
 use swarmrt_ipc::{self as ipc, IpcError};
-use swarmrt_protocol::control::{Control, WorldReport};
+use swarmrt_protocol::control::{Control, ProcessFault, WorldReport};
 use swarmrt_protocol::services::RunServices;
 use swarmrt_protocol::{
     Command, CommandKind, Observation, ObservationHeader, PROTOCOL_VERSION, RobotState,
@@ -804,25 +804,18 @@ impl Shell<'_> {
         let mut rejoining: BTreeSet<u32> = BTreeSet::new();
         for signal in self.world.take_signals() {
             match signal {
-                ProcessSignal::Kill(robot) => {
+                ProcessSignal::Fault(fault) => {
+                    let robot = fault.robot();
+                    // Its last command is no longer its answer: killed, frozen, thawed (its
+                    // silence while frozen was ordered, not a hang) or restarted.
                     standing.forget(robot);
-                    self.hellos.forget(robot);
-                    report(&WorldReport::Kill { robot });
-                }
-                ProcessSignal::Freeze(robot) => {
-                    standing.forget(robot);
-                    report(&WorldReport::Freeze { robot })
-                }
-                ProcessSignal::Thaw(robot) => {
-                    // Its silence while frozen was ordered, not a hang.
-                    standing.forget(robot);
-                    report(&WorldReport::Thaw { robot })
-                }
-                ProcessSignal::Restart { robot, incarnation } => {
-                    // Samples from the old process are no robot's answer any more.
-                    standing.forget(robot);
-                    self.hellos.expect_hello(robot);
-                    report(&WorldReport::Restart { robot, incarnation });
+                    match fault {
+                        ProcessFault::Kill { .. } => self.hellos.forget(robot),
+                        // Samples from the old process are no robot's answer any more.
+                        ProcessFault::Restart { .. } => self.hellos.expect_hello(robot),
+                        ProcessFault::Freeze { .. } | ProcessFault::Thaw { .. } => {}
+                    }
+                    report(&WorldReport::Fault(fault));
                 }
                 ProcessSignal::Rejoin(robot) => {
                     rejoining.insert(robot);

@@ -3,29 +3,19 @@
 
 use rand::Rng as _;
 use swarmrt_protocol::RobotState;
+use swarmrt_protocol::control::ProcessFault;
 use swarmrt_protocol::records::FaultKind;
 use swarmrt_scenario::faults::FaultTarget;
 
 use super::{Event, World};
 
-/// What the process shell must do to a robot's process at this tick boundary. The world core
-/// has already applied it to its own state, so the run replays whatever the signal's timing.
+/// What the shell must do at this tick boundary. The world core has already applied it to
+/// its own state, so the run replays whatever the timing of what the shell does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ProcessSignal {
-    /// SIGKILL it: it is dead from this tick.
-    Kill(u32),
-    /// SIGSTOP it: it is frozen from this tick.
-    Freeze(u32),
-    /// SIGCONT it: it answers this tick's observation again.
-    Thaw(u32),
-    /// SIGKILL it and start a fresh process for the robot, its `incarnation`-th.
-    Restart {
-        /// The robot.
-        robot: u32,
-        /// 1 for the first restart, 2 for the second, ...
-        incarnation: u32,
-    },
-    /// The fresh process must have said hello before this tick is published.
+    /// A fault to carry out on the robot's process (a real signal, via its supervisor).
+    Fault(ProcessFault),
+    /// A restarted robot's fresh process must have said hello before this tick is published.
     Rejoin(u32),
 }
 
@@ -72,7 +62,8 @@ impl World {
         self.metrics.faults_injected += 1;
         self.fault_event(FaultKind::Kill, Some(robot), random);
         self.mark_dead(robot, "fault: kill");
-        self.signals.push(ProcessSignal::Kill(robot));
+        self.signals
+            .push(ProcessSignal::Fault(ProcessFault::Kill { robot }));
     }
 
     fn freeze(&mut self, robot: u32, until: u64, random: bool) {
@@ -86,7 +77,8 @@ impl World {
         r.state = RobotState::Frozen;
         r.v = 0.0;
         r.omega = 0.0;
-        self.signals.push(ProcessSignal::Freeze(robot));
+        self.signals
+            .push(ProcessSignal::Fault(ProcessFault::Freeze { robot }));
     }
 
     /// Applies the faults scheduled at the current tick boundary: first outages that end,
@@ -104,7 +96,8 @@ impl World {
             r.state = o.resume;
             if was == RobotState::Frozen {
                 self.fault_event(FaultKind::Thaw, Some(robot), false);
-                self.signals.push(ProcessSignal::Thaw(robot));
+                self.signals
+                    .push(ProcessSignal::Fault(ProcessFault::Thaw { robot }));
             } else {
                 self.fault_event(FaultKind::Rejoin, Some(robot), false);
                 self.signals.push(ProcessSignal::Rejoin(robot));
@@ -152,10 +145,11 @@ impl World {
                     if self.leader == Some(robot) {
                         self.leader = None;
                     }
-                    self.signals.push(ProcessSignal::Restart {
-                        robot,
-                        incarnation: self.incarnations[i],
-                    });
+                    self.signals
+                        .push(ProcessSignal::Fault(ProcessFault::Restart {
+                            robot,
+                            incarnation: self.incarnations[i],
+                        }));
                 }
                 None => self.fault_event(FaultKind::RestartSkipped, target, false),
             }
