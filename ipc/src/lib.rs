@@ -20,7 +20,7 @@ use iceoryx2_bb_system_types::path::Path as IoxPath;
 
 pub use swarmrt_protocol::services::COMMAND_GROUP;
 use swarmrt_protocol::services::{EVENT_COMMAND, EVENT_CONTROL, RunServices, command_group_of};
-use swarmrt_protocol::{Command, Observation, ObservationHeader};
+use swarmrt_protocol::{Command, Observation, ObservationHeader, PROTOCOL_VERSION};
 
 pub mod bell;
 pub mod cleanup;
@@ -386,6 +386,29 @@ impl WorldPorts {
             commands: CommandSubscribers::open(commands)?,
             listener: commands_event.listener_builder().create()?,
         })
+    }
+
+    /// Publishes the tick's observation slots, one sample for every robot of this host, and
+    /// wakes the robots: the one way a world or a host hands out a tick.
+    pub fn publish(&self, tick: u64, slots: &[Observation]) -> Result<(), IpcError> {
+        self.send(tick, false, slots)
+    }
+
+    /// Publishes the header-only sample that tells every robot the run is over, and wakes them.
+    pub fn publish_shutdown(&self, tick: u64) -> Result<(), IpcError> {
+        self.send(tick, true, &[])
+    }
+
+    fn send(&self, tick: u64, shutdown: bool, slots: &[Observation]) -> Result<(), IpcError> {
+        let sample = self.publisher.loan_slice_uninit(slots.len())?;
+        let mut sample = sample.write_from_slice(slots);
+        *sample.user_header_mut() = ObservationHeader {
+            version: PROTOCOL_VERSION,
+            shutdown: u32::from(shutdown),
+            tick,
+        };
+        sample.send()?;
+        self.wake_robots()
     }
 
     /// Wakes the robots after a sample was sent: every robot sleeping on the bell with one

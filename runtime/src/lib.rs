@@ -7,11 +7,13 @@
 //! - [`robot`]: the `swarm-agent` process around `swarmrt_agent::Agent`: says hello, sleeps
 //!   until a tick, answers it.
 //! - [`host`]: the `swarm-host` process: a remote host's stand-in for the world.
+//! - [`inbox`]: the command inbox every shell reads its robots' answers through.
 //! - [`supervisor`]: the robot process lifecycle all three drive (spawn, hello binding,
 //!   kill, freeze, thaw, restart, reap, shut down), a pure state machine.
 #![warn(missing_docs)]
 
 pub mod host;
+pub mod inbox;
 pub mod robot;
 pub mod supervisor;
 pub mod world;

@@ -20,13 +20,14 @@ use iceoryx2::prelude::*;
 use serde::Serialize;
 use swarmrt_ipc::cleanup;
 use swarmrt_ipc::{self as ipc, IpcError};
+use swarmrt_protocol::Command;
 use swarmrt_protocol::control::{HostControl, HostReport, ProcessFault};
 use swarmrt_protocol::services::{RunServices, valid_run_id};
-use swarmrt_protocol::{Command, Observation, ObservationHeader, PROTOCOL_VERSION};
 use zenoh::Wait;
 use zenoh::qos::CongestionControl;
 use zenoh::sample::SampleKind;
 
+use crate::inbox;
 use crate::supervisor::hello::{Bindings, Sample};
 use crate::supervisor::launch::{self, Launch};
 use crate::supervisor::{Order, Pid, Reaped, Supervisor};
@@ -331,7 +332,7 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
 
     // Tell the robots (a header-only sample), then see them out: EXIT_GRACE to exit on it,
     // then SIGTERM, then SIGKILL.
-    relay.publish(0, 1, &[])?;
+    relay.ports.publish_shutdown(0)?;
     let Relay { mut sup, ports, .. } = relay;
     launch::see_out(&mut sup, &rx, EXIT_GRACE, EXIT_GRACE, |sup, m| {
         if let Msg::Exited(pid, how) = m {
@@ -482,11 +483,13 @@ impl Relay<'_> {
         stats: &mut HostStats,
         send: &mut SendUp,
     ) -> Result<(), IpcError> {
-        while let Some(sample) = self.ports.commands.receive()? {
-            let origin = sample.origin();
-            let c = *sample.payload();
-            drop(sample);
-            match self.bindings.accept(origin, &c) {
+        let origin = |publisher| publisher;
+        inbox::receive(
+            &self.ports.commands,
+            &mut self.bindings,
+            origin,
+            |_| true,
+            |what, c| match what {
                 Sample::Robot(robot) => {
                     self.expect.remove(&robot);
                     self.answered.entry(robot).or_insert(c);
@@ -498,8 +501,8 @@ impl Relay<'_> {
                     self.flush_each = true;
                 }
                 Sample::BadHello | Sample::Unknown => stats.unknown_sender += 1,
-            }
-        }
+            },
+        )?;
         if !self.batch.is_empty() && (self.expect.is_empty() || self.flush_each) {
             if !self.expect.is_empty() {
                 stats.partial_batches += 1;
@@ -546,7 +549,7 @@ impl Relay<'_> {
                     stats.malformed += 1;
                     return Ok(None);
                 }
-                self.publish(tick, 0, &slots)?;
+                self.ports.publish(tick, &slots)?;
                 self.expect = expect
                     .into_iter()
                     .filter(|r| self.robots.contains(r))
@@ -655,20 +658,6 @@ impl Relay<'_> {
             }
             HostControl::Stop | HostControl::Config { .. } => {}
         }
-        Ok(())
-    }
-
-    /// Publishes the robots' slots of `tick` (or, with `shutdown`, the header-only end).
-    fn publish(&mut self, tick: u64, shutdown: u32, slots: &[Observation]) -> Result<(), IpcError> {
-        let sample = self.ports.publisher.loan_slice_uninit(slots.len())?;
-        let mut sample = sample.write_from_slice(slots);
-        *sample.user_header_mut() = ObservationHeader {
-            version: PROTOCOL_VERSION,
-            shutdown,
-            tick,
-        };
-        sample.send()?;
-        self.ports.wake_robots()?;
         Ok(())
     }
 

@@ -82,9 +82,9 @@ pub fn main(vocabulary: swarmrt_protocol::Vocabulary) -> std::process::ExitCode 
     };
     let hosts = hosts.as_ref().map(|(f, l)| (f, *l));
     let mode = if args.realtime {
-        shell::Mode::Realtime
+        super::Mode::Realtime
     } else {
-        shell::Mode::LockStep
+        super::Mode::LockStep
     };
     let opened = match args.out_id {
         Some(id) => swarmrt_scenario::safe_fs::OutDir::open_expected(&args.out, id),

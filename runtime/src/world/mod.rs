@@ -1,5 +1,14 @@
-//! The world process (`swarm-world`): its command line, its loop and its tick timing.
+//! The world process (`swarm-world`): its command line, its shell, its ticks and their timing.
 
+mod answers;
 pub mod cli;
+mod control;
+pub mod mode;
+mod realtime;
+mod remote;
 pub mod shell;
+mod ticks;
 pub mod timing;
+
+pub use mode::Mode;
+pub use realtime::RealtimeStats;
