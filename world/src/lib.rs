@@ -6,7 +6,8 @@
 //!
 //! [`World::step`] (`world/mod.rs`) calls one stage per sibling file: `commands.rs`,
 //! `route.rs` (radio), `kinematics.rs`, `contacts.rs`, `sensing.rs` ([`World::observe`], goal
-//! check) and `faults.rs`; `stage_times.rs` times them when the shell asks.
+//! check) and `faults.rs`; `stage_times.rs` times them when the shell asks. [`lockstep`] is the
+//! one tick every shell drives: faults, answers, propagation rounds, step.
 //!
 //! ```
 //! use swarmrt_protocol::{Command, Observation, Vocabulary};
@@ -40,6 +41,7 @@
 #![warn(missing_docs)]
 
 pub mod grid;
+pub mod lockstep;
 pub mod map;
 pub mod radio;
 pub mod records;

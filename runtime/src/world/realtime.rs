@@ -6,10 +6,11 @@ use std::time::{Duration, Instant};
 
 use swarmrt_ipc::IpcError;
 use swarmrt_protocol::{Command, CommandKind};
+use swarmrt_world::World;
 
 use super::answers::{Origin, count_stranger, is_local};
 use super::control::{drain_control, give_up, wait};
-use super::shell::{Shell, ShellStats};
+use super::shell::{Processes, ShellStats};
 use crate::inbox;
 use crate::supervisor::hello::Sample;
 
@@ -121,13 +122,18 @@ impl Realtime {
     }
 }
 
-impl Shell<'_> {
+impl Processes<'_> {
     /// Real-time: takes whatever arrives until the tick's window closes, then every robot
     /// that expects a command acts on its latest.
-    pub(super) fn answer_realtime(&mut self, tick: u64, rt: &mut Realtime) -> Result<(), IpcError> {
-        self.collect_until(rt)?;
+    pub(super) fn answer_realtime(
+        &mut self,
+        world: &mut World,
+        tick: u64,
+        rt: &mut Realtime,
+    ) -> Result<(), IpcError> {
+        self.collect_until(world, rt)?;
         for robot in std::mem::take(&mut self.answers.pending) {
-            if self.world.robots()[robot as usize].state.expects_command() {
+            if world.robots()[robot as usize].state.expects_command() {
                 self.answers.commands[robot as usize] = rt.command(robot, tick);
             }
         }
@@ -137,14 +143,14 @@ impl Shell<'_> {
     /// Until the window closes, takes every command that arrives as its robot's latest
     /// (binding restarted robots' fresh processes as in lock-step); at its end gives up on a
     /// robot that has sent nothing for `scenario.unresponsive_ms`.
-    fn collect_until(&mut self, rt: &mut Realtime) -> Result<(), IpcError> {
-        let tick = self.world.tick();
+    fn collect_until(&mut self, world: &mut World, rt: &mut Realtime) -> Result<(), IpcError> {
+        let tick = world.tick();
         loop {
             self.receive_latest(tick, rt)?;
             self.interrupted |= drain_control(
                 &self.control,
                 self.node,
-                &mut self.world,
+                world,
                 &mut self.hellos,
                 &mut BTreeSet::new(),
             )?;
@@ -154,7 +160,7 @@ impl Shell<'_> {
             let now = Instant::now();
             if now >= rt.tick_ends {
                 // Once per tick, not per wake-up.
-                self.give_up_silent(now, rt);
+                self.give_up_silent(world, now, rt);
                 return Ok(());
             }
             self.interrupted |= wait(&self.ports.listener, self.node, rt.tick_ends - now)?;
@@ -182,9 +188,8 @@ impl Shell<'_> {
     }
 
     /// Robots that expect a command and sent nothing for `scenario.unresponsive_ms`.
-    fn give_up_silent(&mut self, now: Instant, rt: &mut Realtime) {
-        let hung: Vec<u32> = self
-            .world
+    fn give_up_silent(&mut self, world: &mut World, now: Instant, rt: &mut Realtime) {
+        let hung: Vec<u32> = world
             .robots()
             .iter()
             .filter(|r| r.state.expects_command())
@@ -194,7 +199,7 @@ impl Shell<'_> {
         for robot in hung {
             self.hellos.forget(robot);
             let waited = now.duration_since(rt.heard_at[robot as usize]);
-            give_up(&mut self.world, robot, waited, "nothing sent");
+            give_up(world, robot, waited, "nothing sent");
             rt.forget(robot);
         }
     }

@@ -3,10 +3,12 @@
 //! records. It sleeps in an iceoryx2 listener while robots think; commands, the hosts'
 //! messages and control lines from the orchestrator wake it.
 //!
-//! Its parts: [`super::answers`] (whose answer a command is), [`super::ticks`] (the tick:
-//! faults, publish, collect, rounds, step, record), [`super::realtime`] (pacing by the wall
-//! clock), [`super::remote`] (the hosts of a `--hosts` run), [`super::control`] (the
-//! orchestrator's lines).
+//! The world core is driven by the one lock-step tick ([`swarmrt_world::lockstep`]) with
+//! [`Processes`], the robots as this shell reaches them. Its parts: [`super::answers`]
+//! (whose answer a command is), [`super::ticks`] (the tick over processes: faults, publish,
+//! collect, rounds; the records), [`super::realtime`] (pacing by the wall clock),
+//! [`super::remote`] (the hosts of a `--hosts` run), [`super::control`] (the orchestrator's
+//! lines).
 
 use std::time::{Duration, Instant};
 
@@ -14,6 +16,7 @@ use crossbeam_channel::Receiver;
 use iceoryx2::prelude::*;
 use swarmrt_hosts::HostsFile;
 use swarmrt_ipc::{self as ipc, IpcError};
+use swarmrt_protocol::Observation;
 use swarmrt_protocol::control::{Control, WorldReport};
 use swarmrt_protocol::services::RunServices;
 use swarmrt_scenario::Config;
@@ -23,9 +26,10 @@ use swarmrt_world::records::RecordWriter;
 use super::answers::{self, Answers, Hellos};
 use super::control::{drain_control, report, spawn_control_thread, wait};
 use super::mode::{Mode, refuse_combination};
-use super::realtime::RealtimeStats;
+use super::realtime::{Realtime, RealtimeStats};
 use super::remote::Remote;
-use super::timing::TickTiming;
+use super::ticks::Stamps;
+use super::timing::{TickTimer, TickTiming};
 use crate::supervisor::hello::Bindings;
 
 /// Longest the world waits for all robots to say hello.
@@ -69,22 +73,22 @@ pub fn run(
 ) -> Result<(), IpcError> {
     refuse_combination(cfg, mode, hosts.is_some())?;
     let n = cfg.robots.count as usize;
-    let world = World::new(cfg, vocabulary).map_err(|e| format!("{}: {}", e.key, e.message))?;
+    let mut world = World::new(cfg, vocabulary).map_err(|e| format!("{}: {}", e.key, e.message))?;
     let mut recorder = RecordWriter::for_run(out_dir, cfg)?;
+    world.set_radio_recording(cfg.scenario.record_radio);
     warn_on_fd_limit(n);
     let node = ipc::node(run, &run.world_node_name())?;
-    let mut shell = Shell::open(run, cfg, &node, world, hosts, mode)?;
-    shell.world.set_radio_recording(cfg.scenario.record_radio);
+    let mut robots = Processes::open(run, cfg, &node, hosts, mode)?;
     report(&WorldReport::Listening);
     // Phase 1: every robot says hello (or dies) before tick 0.
     let started = Instant::now();
-    shell.await_hellos(started)?;
+    robots.await_hellos(&mut world, started)?;
     report(&WorldReport::Ready {
         startup_ms: started.elapsed().as_millis() as u64,
     });
     // Phase 2: ticks, then the end.
-    shell.run_ticks(cfg, mode, &mut recorder)?;
-    shell.finish(recorder)
+    robots.run_ticks(&mut world, &mut recorder)?;
+    robots.finish(&mut world, recorder)
 }
 
 /// The robots that count their answers on the bell ([`ipc::bell::Bell::answered`]): this
@@ -124,9 +128,10 @@ fn warn_on_fd_limit(n: usize) {
     }
 }
 
-/// The world process between its phases: the World core and everything that reaches it.
-pub(super) struct Shell<'a> {
-    pub(super) world: World,
+/// The robots as the world process reaches them: processes of this host over shared memory,
+/// and remote hosts' robots behind their link; with everything the ticks need to wait for
+/// their answers.
+pub(super) struct Processes<'a> {
     pub(super) node: &'a Node<ipc::Svc>,
     pub(super) ports: ipc::WorldPorts,
     /// The propagation rounds' ports (`radio.rounds` > 0).
@@ -148,19 +153,26 @@ pub(super) struct Shell<'a> {
     pub(super) unresponsive: Duration,
     /// Per robot, whether it counts its answers on the bell (None: nobody does).
     pub(super) counting: Option<Vec<bool>>,
+    /// `scenario.deadline_ms`: an answer later than this is counted late.
+    pub(super) deadline: Duration,
+    /// The wall clock of a `--realtime` run.
+    pub(super) realtime: Option<Realtime>,
+    /// The tick's observations, one slot per robot.
+    pub(super) obs: Vec<Observation>,
+    pub(super) stamps: Stamps,
+    pub(super) timer: TickTimer,
 }
 
-impl<'a> Shell<'a> {
+impl<'a> Processes<'a> {
     /// Creates the run's services and opens the world's ports, the rounds', the control
     /// thread and the hosts' link.
     fn open(
         run: &RunServices,
         cfg: &Config,
         node: &'a Node<ipc::Svc>,
-        world: World,
         hosts: Option<(&HostsFile, u32)>,
         mode: Mode,
-    ) -> Result<Shell<'a>, IpcError> {
+    ) -> Result<Processes<'a>, IpcError> {
         let n = cfg.robots.count as usize;
         let observers = cfg.ipc.observers as usize;
         let restarts = cfg.faults.restart.len();
@@ -177,8 +189,7 @@ impl<'a> Shell<'a> {
             Some((file, layout)) => Some(Remote::open(run, file, layout)?),
             None => None,
         };
-        Ok(Shell {
-            world,
+        Ok(Processes {
             node,
             ports,
             rounds,
@@ -196,12 +207,17 @@ impl<'a> Shell<'a> {
             interrupted: false,
             unresponsive: Duration::from_millis(cfg.scenario.unresponsive_ms),
             counting: counting_robots(cfg, n, hosts.map(|(f, _)| f), mode),
+            deadline: Duration::from_millis(cfg.scenario.deadline_ms),
+            realtime: (mode == Mode::Realtime).then(|| Realtime::new(n, cfg.scenario.dt)),
+            obs: vec![Observation::empty(0, 0); n],
+            stamps: Stamps::default(),
+            timer: TickTimer::default(),
         })
     }
 
     /// Takes everything that arrived: local command samples, the hosts' messages and the
     /// orchestrator's control lines.
-    pub(super) fn gather(&mut self) -> Result<(), IpcError> {
+    pub(super) fn gather(&mut self, world: &mut World) -> Result<(), IpcError> {
         answers::receive(
             &self.ports.commands,
             &self.remote_robot,
@@ -210,17 +226,12 @@ impl<'a> Shell<'a> {
             &mut self.stats,
         )?;
         if let Some(r) = self.remote.as_mut() {
-            r.drain(
-                &mut self.world,
-                &mut self.hellos,
-                &mut self.answers,
-                &mut self.stats,
-            )?;
+            r.drain(world, &mut self.hellos, &mut self.answers, &mut self.stats)?;
         }
         self.interrupted |= drain_control(
             &self.control,
             self.node,
-            &mut self.world,
+            world,
             &mut self.hellos,
             &mut self.answers.pending,
         )?;
@@ -239,9 +250,9 @@ impl<'a> Shell<'a> {
     }
 
     /// Phase 1: waits until every robot said hello (or died), for [`STARTUP_TIMEOUT`].
-    fn await_hellos(&mut self, started: Instant) -> Result<(), IpcError> {
+    fn await_hellos(&mut self, world: &mut World, started: Instant) -> Result<(), IpcError> {
         while !self.hellos.awaiting_set().is_empty() && !self.interrupted {
-            self.gather()?;
+            self.gather(world)?;
             if self.hellos.awaiting_set().is_empty() || self.interrupted {
                 break;
             }
@@ -260,16 +271,16 @@ impl<'a> Shell<'a> {
     }
 
     /// Tells robots and hosts the run is over, closes the records and reports them.
-    fn finish(mut self, mut recorder: RecordWriter) -> Result<(), IpcError> {
-        let tick = self.world.tick();
+    fn finish(mut self, world: &mut World, mut recorder: RecordWriter) -> Result<(), IpcError> {
+        let tick = world.tick();
         self.ports.publish_shutdown(tick)?;
         if let Some(r) = self.remote.take() {
             r.finish(tick, &mut self.stats);
         }
         // Deaths marked after the last recorded tick: events only, the tick's rows exist.
-        recorder.record_events(self.world.drain_events())?;
+        recorder.record_events(world.drain_events())?;
         recorder.finish()?;
-        let mut metrics = serde_json::to_value(self.world.metrics())?;
+        let mut metrics = serde_json::to_value(world.metrics())?;
         metrics["shell"] = serde_json::to_value(&self.stats)?;
         report(&WorldReport::Tick { tick });
         report(&WorldReport::Done {

@@ -1,23 +1,22 @@
-//! The world's ticks over processes: the schedule's faults, then the observations published
-//! to every robot (and host), their answers collected (in lock-step, or by the wall clock),
-//! the propagation rounds, the step and the records, in the order the in-process
-//! [`swarmrt_harness`] lock-step calls the same cores, so both write the same bytes.
+//! The world's ticks over processes: [`swarmrt_world::lockstep::tick`], the one lock-step
+//! tick of both modes, driven with robots reached as processes ([`Robots`] for
+//! [`Processes`]): the schedule's faults go to the orchestrator, the observations are
+//! published to every robot (and host), their answers collected (in lock-step, or by the
+//! wall clock), the propagation rounds published and collected; then the records.
 
 use std::collections::BTreeSet;
 use std::time::{Duration, Instant};
 
 use swarmrt_ipc::IpcError;
 use swarmrt_protocol::control::{ProcessFault, WorldReport};
-use swarmrt_protocol::{Observation, RobotState};
-use swarmrt_scenario::Config;
-use swarmrt_world::ProcessSignal;
+use swarmrt_protocol::{Command, RobotState, RoundInbox};
+use swarmrt_world::lockstep::{self, Robots};
 use swarmrt_world::records::RecordWriter;
+use swarmrt_world::{ProcessSignal, World};
 
 use super::control::{give_up, report};
-use super::mode::Mode;
-use super::realtime::Realtime;
-use super::shell::Shell;
-use super::timing::{TickPhases, TickTimer, thread_cpu_ns};
+use super::shell::Processes;
+use super::timing::{TickPhases, thread_cpu_ns};
 
 /// Minimum interval between progress reports on stdout.
 const PROGRESS_EVERY: Duration = Duration::from_millis(200);
@@ -26,118 +25,160 @@ const PROGRESS_EVERY: Duration = Duration::from_millis(200);
 /// reads memory then).
 pub const EARLY_REPORTS: u64 = 32;
 
-/// How the ticks wait for answers, and the observations they hand out.
-struct Pace {
-    /// `scenario.deadline_ms`: an answer later than this is counted late.
-    deadline: Duration,
-    /// The wall clock of a real-time run.
-    realtime: Option<Realtime>,
-    obs: Vec<Observation>,
-    timer: TickTimer,
-    last_progress: Instant,
+/// When the phases of the current tick began, for `shell.timing`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Stamps {
+    observe: Instant,
+    publish: Instant,
+    wait: Instant,
+    step: Instant,
+    publish_cpu: u64,
 }
 
-impl Shell<'_> {
-    /// Phase 2: ticks until the scenario ends or the run is stopped.
-    pub(super) fn run_ticks(
-        &mut self,
-        cfg: &Config,
-        mode: Mode,
-        recorder: &mut RecordWriter,
-    ) -> Result<(), IpcError> {
-        let n = self.answers.commands.len();
-        // The world times its stages too (wall clock, for `shell.timing` only).
-        self.world.set_stage_timing(true);
-        let events = self.world.drain_events();
-        recorder.record(self.world.tick(), self.world.robots(), events)?;
-        let mut pace = Pace {
-            deadline: Duration::from_millis(cfg.scenario.deadline_ms),
-            obs: vec![Observation::empty(0, 0); n],
-            timer: TickTimer::default(),
-            last_progress: Instant::now(),
-            realtime: (mode == Mode::Realtime).then(|| Realtime::new(n, cfg.scenario.dt)),
-        };
-        while !self.interrupted && !self.world.finished() {
-            let Some(phases) = self.tick(&mut pace, recorder)? else {
-                break;
-            };
-            pace.timer.add(phases);
-            self.report_progress(&mut pace.last_progress);
-            if let Some(rt) = pace.realtime.as_mut() {
-                rt.end_tick();
-            }
+impl Default for Stamps {
+    fn default() -> Stamps {
+        let now = Instant::now();
+        Stamps {
+            observe: now,
+            publish: now,
+            wait: now,
+            step: now,
+            publish_cpu: 0,
         }
-        self.stats.realtime = pace.realtime.map(|rt| rt.stats);
-        self.stats.timing = pace.timer.summary();
+    }
+}
+
+impl Robots for Processes<'_> {
+    type Error = IpcError;
+
+    fn carry_out(
+        &mut self,
+        world: &mut World,
+        signals: Vec<ProcessSignal>,
+    ) -> Result<(), IpcError> {
+        let rejoining = self.report_faults(signals);
+        self.await_rejoin(world, rejoining)
+    }
+
+    fn answer(
+        &mut self,
+        world: &mut World,
+        commands: &mut Vec<Option<Command>>,
+    ) -> Result<(), IpcError> {
+        let tick = world.tick();
+        let mut obs = std::mem::take(&mut self.obs);
+        self.stamps.observe = Instant::now();
+        world.observe(&mut obs);
+        self.stamps.publish = Instant::now();
+        let cpu = thread_cpu_ns();
+        let published = self.publish(world, tick, &obs);
+        self.obs = obs;
+        published?;
+        self.stamps.publish_cpu = thread_cpu_ns().saturating_sub(cpu);
+        self.stamps.wait = Instant::now();
+        match self.realtime.take() {
+            Some(mut rt) => {
+                let answered = self.answer_realtime(world, tick, &mut rt);
+                self.realtime = Some(rt);
+                answered?;
+            }
+            None => self.collect(world, tick)?,
+        }
+        std::mem::swap(&mut self.answers.commands, commands);
         Ok(())
     }
 
-    /// One tick; `None` when the run was stopped before the world could step.
-    fn tick(
+    fn react(
         &mut self,
-        pace: &mut Pace,
-        recorder: &mut RecordWriter,
-    ) -> Result<Option<TickPhases>, IpcError> {
-        let rejoining = self.carry_out_signals(pace.realtime.as_mut());
-        let tick = self.world.tick();
-        self.await_rejoin(rejoining)?;
-        if self.interrupted {
-            return Ok(None);
+        world: &mut World,
+        round: &[RoundInbox],
+        reactions: &mut [Option<Command>],
+    ) -> Result<(), IpcError> {
+        let Some(rounds) = &self.rounds else {
+            return Ok(());
+        };
+        let tick = world.tick();
+        self.answers.commands.iter_mut().for_each(|c| *c = None);
+        self.answers.pending = round.iter().map(|b| b.robot).collect();
+        rounds.publish(tick, world.round(), round)?;
+        self.collect(world, tick)?;
+        for b in round {
+            reactions[b.robot as usize] = self.answers.commands[b.robot as usize];
         }
-        let t0 = Instant::now();
-        self.world.observe(&mut pace.obs);
-        let t1 = Instant::now();
-        let cpu1 = thread_cpu_ns();
-        self.publish(tick, &pace.obs)?;
-        let publish_cpu = thread_cpu_ns().saturating_sub(cpu1);
-        let t2 = Instant::now();
-        match pace.realtime.as_mut() {
-            Some(rt) => self.answer_realtime(tick, rt)?,
-            None => {
-                self.collect(tick, pace.deadline)?;
-                if !self.interrupted {
-                    self.propagate(tick, pace.deadline)?;
-                }
+        Ok(())
+    }
+
+    fn stopped(&self) -> bool {
+        self.interrupted
+    }
+
+    fn stepping(&mut self) {
+        self.stamps.step = Instant::now();
+    }
+}
+
+impl Processes<'_> {
+    /// Phase 2: ticks until the scenario ends or the run is stopped.
+    pub(super) fn run_ticks(
+        &mut self,
+        world: &mut World,
+        recorder: &mut RecordWriter,
+    ) -> Result<(), IpcError> {
+        // The world times its stages too (wall clock, for `shell.timing` only).
+        world.set_stage_timing(true);
+        let events = world.drain_events();
+        recorder.record(world.tick(), world.robots(), events)?;
+        let mut commands = vec![None; self.answers.commands.len()];
+        let mut last_progress = Instant::now();
+        while !self.interrupted && !world.finished() {
+            if !lockstep::tick(world, self, &mut commands)? {
+                break;
+            }
+            let events = world.drain_events();
+            let radio = world.take_radio_rows();
+            let recording = Instant::now();
+            recorder.record_tick(world.tick(), world.robots(), events, radio)?;
+            self.time_tick(world, recording);
+            self.report_progress(world.tick(), &mut last_progress);
+            if let Some(rt) = self.realtime.as_mut() {
+                rt.end_tick();
             }
         }
-        if self.interrupted {
-            return Ok(None);
-        }
-        // With rounds, `wait` includes them.
-        let t3 = Instant::now();
-        self.world.step(&self.answers.commands);
-        let events = self.world.drain_events();
-        let radio = self.world.take_radio_rows();
-        let t4 = Instant::now();
-        recorder.record_tick(self.world.tick(), self.world.robots(), events, radio)?;
-        let t5 = Instant::now();
-        let ns = |a: Instant, b: Instant| (b - a).as_nanos() as u64;
-        Ok(Some(TickPhases {
-            observe: ns(t0, t1),
-            publish: ns(t1, t2),
-            wait: ns(t2, t3),
-            step: ns(t3, t4),
-            record: ns(t4, t5),
-            publish_cpu,
-            stages: self.world.take_stage_times(),
-        }))
+        self.stats.realtime = self.realtime.take().map(|rt| rt.stats);
+        self.stats.timing = self.timer.summary();
+        Ok(())
+    }
+
+    /// Adds the tick just recorded to `shell.timing` (the records were handed over at
+    /// `recording`).
+    fn time_tick(&mut self, world: &mut World, recording: Instant) {
+        let s = self.stamps;
+        let ns = |a: Instant, b: Instant| b.saturating_duration_since(a).as_nanos() as u64;
+        self.timer.add(TickPhases {
+            observe: ns(s.observe, s.publish),
+            publish: ns(s.publish, s.wait),
+            // With rounds, `wait` includes them.
+            wait: ns(s.wait, s.step),
+            step: ns(s.step, recording),
+            record: ns(recording, Instant::now()),
+            publish_cpu: s.publish_cpu,
+            stages: world.take_stage_times(),
+        });
     }
 
     /// Reports the tick just completed: each of the first ones, then a few times a second.
-    fn report_progress(&mut self, last: &mut Instant) {
-        if self.world.tick() <= EARLY_REPORTS || last.elapsed() >= PROGRESS_EVERY {
+    fn report_progress(&mut self, tick: u64, last: &mut Instant) {
+        if tick <= EARLY_REPORTS || last.elapsed() >= PROGRESS_EVERY {
             *last = Instant::now();
-            report(&WorldReport::Tick {
-                tick: self.world.tick(),
-            });
+            report(&WorldReport::Tick { tick });
         }
     }
 
     /// The schedule's process faults of this tick, passed to the orchestrator (which carries
     /// them out); returns the restarted robots that rejoin now.
-    fn carry_out_signals(&mut self, mut realtime: Option<&mut Realtime>) -> BTreeSet<u32> {
+    fn report_faults(&mut self, signals: Vec<ProcessSignal>) -> BTreeSet<u32> {
         let mut rejoining: BTreeSet<u32> = BTreeSet::new();
-        for signal in self.world.take_signals() {
+        for signal in signals {
             let fault = match signal {
                 ProcessSignal::Rejoin(robot) => {
                     rejoining.insert(robot);
@@ -148,7 +189,7 @@ impl Shell<'_> {
             let robot = fault.robot();
             // Its last command is no longer its answer: killed, frozen, thawed (its silence
             // while frozen was ordered, not a hang) or restarted.
-            if let Some(rt) = realtime.as_deref_mut() {
+            if let Some(rt) = self.realtime.as_mut() {
                 rt.forget(robot);
             }
             match fault {
@@ -164,14 +205,17 @@ impl Shell<'_> {
 
     /// A rejoining robot's fresh process must be bound before its first observation; one
     /// that says no hello for `scenario.unresponsive_ms` is given up.
-    fn await_rejoin(&mut self, mut rejoining: BTreeSet<u32>) -> Result<(), IpcError> {
+    fn await_rejoin(
+        &mut self,
+        world: &mut World,
+        mut rejoining: BTreeSet<u32>,
+    ) -> Result<(), IpcError> {
         let hello_since = Instant::now();
         while !rejoining.is_empty() {
             self.answers.pending.clear();
-            self.gather()?;
+            self.gather(world)?;
             rejoining.retain(|r| {
-                self.hellos.is_awaiting(*r)
-                    && self.world.robots()[*r as usize].state != RobotState::Dead
+                self.hellos.is_awaiting(*r) && world.robots()[*r as usize].state != RobotState::Dead
             });
             if rejoining.is_empty() || self.interrupted {
                 break;
@@ -179,7 +223,7 @@ impl Shell<'_> {
             if hello_since.elapsed() >= self.unresponsive {
                 for &robot in &rejoining {
                     give_up(
-                        &mut self.world,
+                        world,
                         robot,
                         hello_since.elapsed(),
                         "never said hello after its restart",
@@ -195,10 +239,14 @@ impl Shell<'_> {
 
     /// Publishes the tick's observations (locally and to the hosts) and notes which robots
     /// the tick waits for.
-    fn publish(&mut self, tick: u64, obs: &[Observation]) -> Result<(), IpcError> {
+    fn publish(
+        &mut self,
+        world: &World,
+        tick: u64,
+        obs: &[swarmrt_protocol::Observation],
+    ) -> Result<(), IpcError> {
         self.answers.commands.iter_mut().for_each(|c| *c = None);
-        self.answers.pending = self
-            .world
+        self.answers.pending = world
             .robots()
             .iter()
             .filter(|r| r.state.expects_command())
@@ -243,51 +291,15 @@ impl Shell<'_> {
         bell.answers() >= target
     }
 
-    /// The tick's propagation rounds (`radio.rounds` > 0), as [`swarmrt_harness`]'s
-    /// `Lockstep::propagate` runs them: each round is published to the robots woken in it,
-    /// their reactions are collected as a tick's answers are (deadline, unresponsive, deaths)
-    /// and applied in ascending robot order.
-    fn propagate(&mut self, tick: u64, deadline: Duration) -> Result<(), IpcError> {
-        let Some(rounds) = self.rounds.take() else {
-            return Ok(());
-        };
-        let mut acts = std::mem::take(&mut self.answers.commands);
-        self.answers.commands = vec![None; acts.len()];
-        self.world.start_rounds(&acts);
-        let result = loop {
-            let round = self.world.next_round();
-            if round.is_empty() {
-                break Ok(());
-            }
-            self.answers.commands.iter_mut().for_each(|c| *c = None);
-            self.answers.pending = round.iter().map(|b| b.robot).collect();
-            if let Err(e) = rounds.publish(tick, self.world.round(), &round) {
-                break Err(e);
-            }
-            if let Err(e) = self.collect(tick, deadline) {
-                break Err(e);
-            }
-            for b in &round {
-                let answer = self.answers.commands[b.robot as usize];
-                self.world.react(b.robot, answer.as_ref(), &mut acts);
-            }
-            if self.interrupted {
-                break Ok(());
-            }
-        };
-        self.answers.commands = acts;
-        self.rounds = Some(rounds);
-        result
-    }
-
-    /// Lock-step: waits until every pending robot answered. Past `deadline` the late ones are
-    /// counted; past `scenario.unresponsive_ms` they are given up.
-    fn collect(&mut self, tick: u64, deadline: Duration) -> Result<(), IpcError> {
+    /// Lock-step: waits until every pending robot answered (a tick's answers, or a round's
+    /// reactions). Past `scenario.deadline_ms` the late ones are counted; past
+    /// `scenario.unresponsive_ms` they are given up.
+    fn collect(&mut self, world: &mut World, tick: u64) -> Result<(), IpcError> {
         let sent_at = Instant::now();
         let mut late_logged = false;
         loop {
             let base = self.ports.bell.answers();
-            self.gather()?;
+            self.gather(world)?;
             if self.answers.pending.is_empty() || self.interrupted {
                 return Ok(());
             }
@@ -295,12 +307,12 @@ impl Shell<'_> {
             if waited >= self.unresponsive {
                 for robot in std::mem::take(&mut self.answers.pending) {
                     self.hellos.forget(robot);
-                    give_up(&mut self.world, robot, waited, "no answer");
+                    give_up(world, robot, waited, "no answer");
                 }
                 return Ok(());
             }
-            let timeout = if waited < deadline {
-                deadline - waited
+            let timeout = if waited < self.deadline {
+                self.deadline - waited
             } else {
                 if !late_logged {
                     late_logged = true;
