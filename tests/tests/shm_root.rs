@@ -13,54 +13,17 @@ use std::sync::OnceLock;
 use std::time::Duration;
 
 use swarmrt_protocol::services::{SHM_BASE_ENV, euid, ipc_base_dir, ipc_root_of, shm_prefix_of};
+use swarmrt_tests::stranger::{STRANGER, require_root};
 use swarmrt_tests::*;
 
 const LIMIT: Duration = Duration::from_secs(120);
-/// The second local user the tests act as.
-const OTHER: &str = "swarmrt-other";
-
-/// The uid of [`OTHER`], made with `useradd` if missing; `None` (after saying why) where no
-/// second user can be had, or where the tests do not run as root.
-fn other_uid() -> Option<u32> {
-    static UID: OnceLock<Option<u32>> = OnceLock::new();
-    *UID.get_or_init(|| {
-        if euid() != 0 {
-            eprintln!("skipped: acting as a second user needs root (useradd, runuser)");
-            return None;
-        }
-        let lookup = || {
-            let out = Command::new("id").args(["-u", OTHER]).output().ok()?;
-            String::from_utf8_lossy(&out.stdout)
-                .trim()
-                .parse::<u32>()
-                .ok()
-        };
-        if let Some(uid) = lookup() {
-            return Some(uid);
-        }
-        match Command::new("useradd")
-            .args(["--system", "--no-create-home", OTHER])
-            .status()
-        {
-            Ok(s) => assert!(s.success(), "useradd {OTHER} failed ({s})"),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                eprintln!("skipped: no useradd here to make the second user {OTHER}");
-                return None;
-            }
-            Err(e) => panic!("useradd {OTHER}: {e}"),
-        }
-        Some(lookup().expect("the user useradd made"))
-    })
-}
-
-/// `program args...` as [`OTHER`] (`runuser -u swarmrt-other --`).
+/// `program args...` as another local user ([`STRANGER`], through `setpriv`).
 fn as_other(program: &str, args: &[&Path]) -> Output {
-    Command::new("runuser")
-        .args(["-u", OTHER, "--", program])
+    STRANGER
+        .command(program)
         .args(args)
-        .stdin(Stdio::null())
         .output()
-        .expect("runuser starts")
+        .expect("setpriv starts")
 }
 
 /// Asserts `out` failed with "Permission denied" or "Operation not permitted".
@@ -69,7 +32,8 @@ fn assert_denied(out: &Output, what: &str) {
     assert!(
         !out.status.success()
             && (err.contains("Permission denied") || err.contains("Operation not permitted")),
-        "{what} as {OTHER}: {} {err:?} {:?}",
+        "{what} as uid {}: {} {err:?} {:?}",
+        STRANGER.uid,
         out.status,
         String::from_utf8_lossy(&out.stdout)
     );
@@ -100,13 +64,15 @@ impl Drop for Running {
 
 #[test]
 fn another_user_can_neither_read_nor_replace_a_running_run() {
-    let Some(other) = other_uid() else { return };
+    // Acting as another user needs root (CI runs the suite as root): fails here otherwise.
+    require_root();
+    let other = STRANGER.uid;
     // Acting as someone else for real, before anything that would harm the run if not.
     let who = as_other("id", &[Path::new("-u")]);
     assert_eq!(
         String::from_utf8_lossy(&who.stdout).trim(),
         other.to_string(),
-        "runuser acts as {OTHER}"
+        "setpriv acts as the stranger"
     );
     assert_ne!(other, euid());
 
@@ -239,12 +205,9 @@ fn assert_refused(out: &Output, line: &str, empty: &Path) {
 
 #[test]
 fn a_base_owned_by_another_user_is_refused() {
-    if euid() != 0 {
-        eprintln!("skipped: giving a directory to another user needs root");
-        return;
-    }
-    // Another user's uid: the second user's, or nobody's where it cannot be made.
-    let other = other_uid().unwrap_or(65534);
+    // Giving a directory to another user needs root: fails here otherwise.
+    require_root();
+    let other = STRANGER.uid;
     let tmp = tempfile::tempdir().unwrap();
     let base = TestBase::new();
     std::fs::create_dir(&base.0).unwrap();
