@@ -8,8 +8,7 @@
 
 use std::os::unix::fs::{MetadataExt, PermissionsExt};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::sync::OnceLock;
+use std::process::Output;
 use std::time::Duration;
 
 use swarmrt_protocol::services::{SHM_BASE_ENV, euid, ipc_base_dir, ipc_root_of, shm_prefix_of};
