@@ -14,15 +14,15 @@ use std::marker::PhantomData;
 use serde::{Deserialize as _, Serialize};
 use serde_json::Value;
 use swarmrt_protocol::records::Records;
-use swarmrt_protocol::{Command, NoteJson, Observation, RecordedNote, Vocabulary};
+use swarmrt_protocol::{NoteJson, Observation, RecordedNote, Vocabulary};
 use swarmrt_scenario::reference::Schema;
 use swarmrt_scenario::{BehaviourSection, Config, ConfigError, KeyError};
 
 use crate::behaviour::{Act, Behaviour, Params, Series};
 pub use crate::behaviours::{BEHAVIOURS, Note, RadioMsg};
-use crate::consensus::{ConsensusNote, Decision, Leadership, lane};
+use crate::consensus::{ConsensusNote, Decision, Leadership};
 use crate::inbox::Heard;
-use crate::overlay::{Headline, LaneChange, Overlay, RoleDef};
+use crate::overlay::{Headline, LaneChange, Overlay, RoleDef, lane};
 pub use crate::wire::WireTag;
 
 /// Connects a behaviour to its variants of the envelopes (written by `behaviours!`); every
@@ -66,33 +66,33 @@ pub trait Plugin: Sync {
     fn role_after(&self, cfg: &Config, id: u32, note: &Value) -> Option<u8>;
     /// `note` (as [`Plugin::role_after`] takes it) as a headline of the event timeline: the
     /// behaviour's notable notes, and the consensus layer's (`{"consensus":{...}}`: elections,
-    /// quadrant leaders, [`crate::consensus::lane::headline`]).
+    /// quadrant leaders, [`crate::overlay::lane::headline`]).
     fn headline(&self, note: &Value) -> Option<Headline>;
     /// How `note` changes the reporter's consensus lane: the consensus layer's notes
-    /// ([`crate::consensus::lane::lane_change`]) and the behaviour's own leader choice
+    /// ([`crate::overlay::lane::lane_change`]) and the behaviour's own leader choice
     /// (grouping's `leader` note).
     fn lane(&self, note: &Value) -> Option<LaneChange>;
 }
 
 /// A behaviour driven for one robot, its types erased: the agent hands it the tick's
-/// decoded radio messages and committed decisions, it fills the command and its notes.
+/// decoded radio messages and committed decisions, it answers with a [`Decided`], from which
+/// the agent composes the command.
 pub trait Brain: Send {
     /// [`Behaviour::LISTENS`] of the behaviour inside.
     fn listens(&self) -> bool;
 
-    /// One tick; messages of other kinds are ignored. `leadership` is the election as this
-    /// robot knows it (Raft scenarios); the behaviour's proposals for the log go to
-    /// `proposals`.
-    fn step(&mut self, tick: Tick<'_>, cmd: &mut Command, out: &mut Out<'_>);
+    /// One tick; messages of other kinds are ignored. `out` comes cleared.
+    fn step(&mut self, tick: Tick<'_>, out: &mut Decided);
 
-    /// A propagation round within the tick of `obs`: `cmd` comes with the tick's motion so
-    /// far; the behaviour may change it and send frames (all within the tick).
+    /// A propagation round within the tick of `obs`: the behaviour starts from the tick's
+    /// `motion` so far, may change it and send frames (all within the tick). `out` comes
+    /// cleared.
     fn react(
         &mut self,
         obs: &Observation,
         heard: &mut Vec<Heard<RadioMsg>>,
-        cmd: &mut Command,
-        notes: &mut Vec<Note>,
+        motion: Motion,
+        out: &mut Decided,
     );
 }
 
@@ -108,12 +108,43 @@ pub struct Tick<'a> {
     pub leadership: Option<Leadership>,
 }
 
-/// What a [`Brain`] hands back besides the command.
-pub struct Out<'a> {
+/// The motion fields of a command: what a behaviour decides and a reaction starts from.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Motion {
+    /// Forward speed in m/s.
+    pub v: f64,
+    /// Turn rate in rad/s.
+    pub omega: f64,
+    /// Aerial robots: `[east, north, up]` in m/s.
+    pub velocity: [f64; 3],
+    /// Lidar on for the next observation.
+    pub lidar_on: bool,
+}
+
+/// What a [`Brain`] decided, in the envelopes: the agent writes it into the command.
+#[derive(Debug, Clone, Default)]
+pub struct Decided {
+    /// Wheel speeds (or velocity) and the lidar switch.
+    pub motion: Motion,
+    /// `(destination, message)` in sending order, those within the tick first.
+    pub frames: Vec<(u32, RadioMsg)>,
+    /// How many of `frames` travel within the tick.
+    pub in_tick: usize,
     /// Its notes for the record.
-    pub notes: &'a mut Vec<Note>,
+    pub notes: Vec<Note>,
     /// Its proposals for the replicated log.
-    pub proposals: &'a mut Vec<Decision>,
+    pub proposals: Vec<Decision>,
+}
+
+impl Decided {
+    /// Empties it for the next tick, keeping the buffers.
+    pub fn clear(&mut self) {
+        self.motion = Motion::default();
+        self.frames.clear();
+        self.in_tick = 0;
+        self.notes.clear();
+        self.proposals.clear();
+    }
 }
 
 /// A behaviour as a registry entry (its types erased behind [`Plugin`]).
@@ -256,8 +287,7 @@ impl<B: Enveloped> Brain for Driver<B> {
         B::LISTENS
     }
 
-    fn step(&mut self, tick: Tick<'_>, cmd: &mut Command, out: &mut Out<'_>) {
-        let obs = tick.obs;
+    fn step(&mut self, tick: Tick<'_>, out: &mut Decided) {
         for d in tick.decisions {
             self.behaviour.apply(d);
         }
@@ -266,26 +296,26 @@ impl<B: Enveloped> Brain for Driver<B> {
         }
         self.take_inbox(tick.heard);
         self.act.reset();
-        self.behaviour.step(obs, &self.inbox, &mut self.act);
+        self.behaviour.step(tick.obs, &self.inbox, &mut self.act);
         out.proposals.extend_from_slice(self.act.proposals());
-        self.fill(cmd, out.notes);
+        self.hand_over(out);
     }
 
     fn react(
         &mut self,
         obs: &Observation,
         heard: &mut Vec<Heard<RadioMsg>>,
-        cmd: &mut Command,
-        notes: &mut Vec<Note>,
+        motion: Motion,
+        out: &mut Decided,
     ) {
         self.take_inbox(heard);
         self.act.reset();
-        self.act.v = cmd.v;
-        self.act.omega = cmd.omega;
-        self.act.velocity = [cmd.vx, cmd.vy, cmd.vz];
-        self.act.lidar_on = cmd.lidar_on != 0;
+        self.act.v = motion.v;
+        self.act.omega = motion.omega;
+        self.act.velocity = motion.velocity;
+        self.act.lidar_on = motion.lidar_on;
         self.behaviour.react(obs, &self.inbox, &mut self.act);
-        self.fill(cmd, notes);
+        self.hand_over(out);
     }
 }
 
@@ -302,20 +332,20 @@ impl<B: Enveloped> Driver<B> {
         }));
     }
 
-    /// Writes the act's motion, frames (those within the tick first) and notes into `cmd`.
-    fn fill(&mut self, cmd: &mut Command, notes: &mut Vec<Note>) {
-        cmd.v = self.act.v;
-        cmd.omega = self.act.omega;
-        [cmd.vx, cmd.vy, cmd.vz] = self.act.velocity;
-        cmd.lidar_on = self.act.lidar_on as u8;
-        let (frames, in_tick, mine) = self.act.drain();
-        for (k, (dst, msg)) in frames.into_iter().enumerate() {
-            // A full outbox drops the frame, as the radio would.
-            if cmd.push_frame(dst, &B::wrap_msg(msg)).is_ok() && k < in_tick {
-                cmd.in_tick += 1;
-            }
-        }
-        notes.extend(mine.map(B::wrap_note));
+    /// Hands the act's motion, frames (those within the tick first) and notes over, in
+    /// the envelopes.
+    fn hand_over(&mut self, out: &mut Decided) {
+        out.motion = Motion {
+            v: self.act.v,
+            omega: self.act.omega,
+            velocity: self.act.velocity,
+            lidar_on: self.act.lidar_on,
+        };
+        let (frames, in_tick, notes) = self.act.drain();
+        out.in_tick = in_tick;
+        out.frames
+            .extend(frames.into_iter().map(|(dst, m)| (dst, B::wrap_msg(m))));
+        out.notes.extend(notes.map(B::wrap_note));
     }
 }
 

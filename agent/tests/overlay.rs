@@ -10,7 +10,7 @@ use swarmrt_agent::behaviours::chain::{ChainNote, VetoWhy};
 use swarmrt_agent::behaviours::formation::FormationNote;
 use swarmrt_agent::behaviours::grouping::GroupNote;
 use swarmrt_agent::behaviours::planner::{HoverWhy, PlanNote};
-use swarmrt_agent::consensus::lane::{self, lane_change};
+use swarmrt_agent::overlay::lane::{self, lane_change};
 use swarmrt_agent::consensus::{ConsensusNote, Role};
 use swarmrt_agent::overlay::{Headline, LaneChange};
 use swarmrt_agent::registry::{self, BEHAVIOURS, Plugin, VOCABULARY};
