@@ -34,6 +34,8 @@ pub trait Enveloped: Behaviour + Overlay {
     fn unwrap_msg(msg: RadioMsg) -> Option<Self::Msg>;
     /// `note` inside the note envelope.
     fn wrap_note(note: Self::Note) -> Note;
+    /// The behaviour's own note, if `note` is one.
+    fn note_of(note: &Note) -> Option<&Self::Note>;
 }
 
 /// One behaviour of the registry with its types erased.
@@ -43,35 +45,45 @@ pub trait Plugin: Sync {
     /// Parses, defaults and validates the `[behaviour]` parameters; returns them resolved
     /// (every key present, in declaration order).
     fn resolve(&self, params: &toml::Table, cfg: &Config) -> Result<toml::Table, KeyError>;
-    /// Robot `id`'s brain.
-    fn brain(&self, cfg: &Config, id: u32) -> Result<Box<dyn Brain>, KeyError>;
+    /// The behaviour configured for `cfg`: its `[behaviour]` parameters parsed once, for
+    /// everything that needs them. `Err` (the key and why) when they do not parse.
+    fn configure(&self, cfg: &Config) -> Result<Box<dyn Configured>, KeyError>;
     /// Every `[behaviour]` key with its default, as `behaviour.<key>`.
     fn keys(&self) -> Vec<String>;
     /// Its parameters for the config reference (`docs/config.md`): their table and schema.
     fn reference(&self) -> Schema;
     /// Names of the metrics it computes from the records.
     fn metric_names(&self) -> &'static [&'static str];
-    /// Its metrics for a finished run.
-    fn metrics(&self, cfg: &Config, run: &Records) -> Result<Vec<(&'static str, Value)>, KeyError>;
-    /// Its per-tick tables for a finished run.
-    fn series(&self, cfg: &Config, run: &Records) -> Result<Vec<Series>, KeyError>;
     /// The roles a viewer colours its robots by ([`crate::overlay`]); roles are indices.
     fn roles(&self) -> &'static [RoleDef];
-    /// Robot `id`'s role at the start of the run (`None` also when `cfg`'s `[behaviour]`
-    /// does not parse, which a run's resolved `config.toml` always does).
-    fn initial_role(&self, cfg: &Config, id: u32) -> Option<u8>;
-    /// Robot `id`'s role after it reported `note`, the `note` field of an `events.jsonl`
-    /// line as recorded (a behaviour's note as itself, e.g. `{"veto":{...}}`); `None`:
-    /// unchanged, and for consensus notes and notes that are not this behaviour's.
-    fn role_after(&self, cfg: &Config, id: u32, note: &Value) -> Option<u8>;
-    /// `note` (as [`Plugin::role_after`] takes it) as a headline of the event timeline: the
-    /// behaviour's notable notes, and the consensus layer's (`{"consensus":{...}}`: elections,
-    /// quadrant leaders, [`crate::overlay::lane::headline`]).
-    fn headline(&self, note: &Value) -> Option<Headline>;
+    /// A recorded note, the `note` field of an `events.jsonl` line (a behaviour's note as
+    /// itself, e.g. `{"veto":{...}}`; a consensus note as `{"consensus":{...}}`), decoded
+    /// once into the typed envelope; `None` for anything this behaviour and the consensus
+    /// layer never wrote.
+    fn read_note(&self, note: &Value) -> Option<Note>;
+    /// `note` as a headline of the event timeline: the behaviour's notable notes, and the
+    /// consensus layer's (elections, quadrant leaders, [`crate::overlay::lane::headline`]).
+    fn headline(&self, note: &Note) -> Option<Headline>;
     /// How `note` changes the reporter's consensus lane: the consensus layer's notes
     /// ([`crate::overlay::lane::lane_change`]) and the behaviour's own leader choice
     /// (grouping's `leader` note).
-    fn lane(&self, note: &Value) -> Option<LaneChange>;
+    fn lane(&self, note: &Note) -> Option<LaneChange>;
+}
+
+/// A behaviour configured for one run, its types erased: its parameters were parsed once,
+/// when it was built ([`Plugin::configure`]).
+pub trait Configured: Send + Sync {
+    /// Robot `id`'s brain.
+    fn brain(&self, id: u32) -> Box<dyn Brain>;
+    /// Its metrics for a finished run.
+    fn metrics(&self, run: &Records) -> Vec<(&'static str, Value)>;
+    /// Its per-tick tables for a finished run.
+    fn series(&self, run: &Records) -> Vec<Series>;
+    /// Robot `id`'s role at the start of the run.
+    fn initial_role(&self, id: u32) -> Option<u8>;
+    /// Robot `id`'s role after it reported `note`; `None`: unchanged, and for consensus
+    /// notes and notes that are not this behaviour's.
+    fn role_after(&self, id: u32, note: &Note) -> Option<u8>;
 }
 
 /// A behaviour driven for one robot, its types erased: the agent hands it the tick's
@@ -194,12 +206,10 @@ impl<B: Enveloped> Plugin for Entry<B> {
         Ok(toml::Table::try_from(&p).expect("parameters always serialize"))
     }
 
-    fn brain(&self, cfg: &Config, id: u32) -> Result<Box<dyn Brain>, KeyError> {
-        let p = parse::<B>(&cfg.behaviour.params)?;
-        Ok(Box::new(Driver::<B> {
-            behaviour: B::new(cfg, &p, id),
-            inbox: Vec::new(),
-            act: Act::default(),
+    fn configure(&self, cfg: &Config) -> Result<Box<dyn Configured>, KeyError> {
+        Ok(Box::new(ConfiguredAs::<B> {
+            params: parse::<B>(&cfg.behaviour.params)?,
+            cfg: cfg.clone(),
         }))
     }
 
@@ -227,43 +237,61 @@ impl<B: Enveloped> Plugin for Entry<B> {
         B::METRICS
     }
 
-    fn metrics(&self, cfg: &Config, run: &Records) -> Result<Vec<(&'static str, Value)>, KeyError> {
-        let p = parse::<B>(&cfg.behaviour.params)?;
-        Ok(B::metrics(cfg, &p, run))
-    }
-
-    fn series(&self, cfg: &Config, run: &Records) -> Result<Vec<Series>, KeyError> {
-        let p = parse::<B>(&cfg.behaviour.params)?;
-        Ok(B::series(cfg, &p, run))
-    }
-
     fn roles(&self) -> &'static [RoleDef] {
         B::ROLES
     }
 
-    fn initial_role(&self, cfg: &Config, id: u32) -> Option<u8> {
-        let p = parse::<B>(&cfg.behaviour.params).ok()?;
-        B::initial_role(cfg, &p, id)
-    }
-
-    fn role_after(&self, cfg: &Config, id: u32, note: &Value) -> Option<u8> {
-        let note = behaviour_note::<B>(note)?;
-        let p = parse::<B>(&cfg.behaviour.params).ok()?;
-        B::role_after(&p, id, &note)
-    }
-
-    fn headline(&self, note: &Value) -> Option<Headline> {
+    fn read_note(&self, note: &Value) -> Option<Note> {
         match lane::from_json(note) {
-            Some(c) => lane::headline(&c),
-            None => B::headline(&behaviour_note::<B>(note)?),
+            Some(c) => Some(Note::Consensus(c)),
+            None => behaviour_note::<B>(note).map(B::wrap_note),
         }
     }
 
-    fn lane(&self, note: &Value) -> Option<LaneChange> {
-        match lane::from_json(note) {
-            Some(c) => lane::lane_change(&c),
-            None => B::lane(&behaviour_note::<B>(note)?),
+    fn headline(&self, note: &Note) -> Option<Headline> {
+        match note {
+            Note::Consensus(c) => lane::headline(c),
+            other => B::headline(B::note_of(other)?),
         }
+    }
+
+    fn lane(&self, note: &Note) -> Option<LaneChange> {
+        match note {
+            Note::Consensus(c) => lane::lane_change(c),
+            other => B::lane(B::note_of(other)?),
+        }
+    }
+}
+
+/// `B` configured for one run: the config and its parameters, parsed once.
+struct ConfiguredAs<B: Behaviour> {
+    cfg: Config,
+    params: B::Params,
+}
+
+impl<B: Enveloped> Configured for ConfiguredAs<B> {
+    fn brain(&self, id: u32) -> Box<dyn Brain> {
+        Box::new(Driver::<B> {
+            behaviour: B::new(&self.cfg, &self.params, id),
+            inbox: Vec::new(),
+            act: Act::default(),
+        })
+    }
+
+    fn metrics(&self, run: &Records) -> Vec<(&'static str, Value)> {
+        B::metrics(&self.cfg, &self.params, run)
+    }
+
+    fn series(&self, run: &Records) -> Vec<Series> {
+        B::series(&self.cfg, &self.params, run)
+    }
+
+    fn initial_role(&self, id: u32) -> Option<u8> {
+        B::initial_role(&self.cfg, &self.params, id)
+    }
+
+    fn role_after(&self, id: u32, note: &Note) -> Option<u8> {
+        B::role_after(&self.params, id, B::note_of(note)?)
     }
 }
 
@@ -414,9 +442,15 @@ pub fn from_toml_str(file: &str, text: &str, overrides: &[String]) -> Result<Con
 
 /// Robot `id`'s brain for this scenario; `Err` for a `[behaviour]` no behaviour accepts.
 pub fn brain(cfg: &Config, id: u32) -> Result<Box<dyn Brain>, KeyError> {
+    Ok(configure(cfg)?.brain(id))
+}
+
+/// The behaviour of `cfg` configured for it ([`Plugin::configure`]); `Err` for a
+/// `[behaviour]` no behaviour accepts.
+pub fn configure(cfg: &Config) -> Result<Box<dyn Configured>, KeyError> {
     plugin(&cfg.behaviour.kind)
         .ok_or_else(|| unknown_kind(&cfg.behaviour.kind))?
-        .brain(cfg, id)
+        .configure(cfg)
 }
 
 /// Every `[behaviour]` key of every behaviour (`behaviour.<key>`), sorted, without repeats.
@@ -561,6 +595,12 @@ macro_rules! behaviours {
                 }
                 fn wrap_note(note: Self::Note) -> Note {
                     Note::$variant(note)
+                }
+                fn note_of(note: &Note) -> Option<&Self::Note> {
+                    match note {
+                        Note::$variant(n) => Some(n),
+                        _ => None,
+                    }
                 }
             }
         )+

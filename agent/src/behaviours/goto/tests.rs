@@ -1,8 +1,8 @@
 //! The go-to behaviour and the agent core, observation in, command out.
 
-use swarmrt_agent::Agent;
-use swarmrt_agent::RadioMsg;
-use swarmrt_agent::behaviours::goto::Beacon;
+use crate::Agent;
+use crate::RadioMsg;
+use crate::behaviours::goto::Beacon;
 use swarmrt_protocol::{Frame, MAX_PAYLOAD, Observation, RobotState};
 use swarmrt_scenario::Config;
 
