@@ -1,23 +1,13 @@
-//! The agent core: decodes the radio inbox, runs consensus and the behaviour, fills the
-//! command. Pure: no I/O, no clock.
+//! The agent core: decodes the radio inbox, runs consensus and the behaviour, and composes
+//! the command from what they decided, in one place. Pure: no I/O, no clock.
 
 use swarmrt_protocol::{BROADCAST, Command, CommandKind, Frame, Observation, RobotState};
 use swarmrt_scenario::Config;
 
-use crate::consensus::Consensus;
-use crate::consensus::raft::Persistent;
-use crate::consensus::{ConsensusMsg, Decision};
+use crate::consensus::persist::{Persist, Persistent};
+use crate::consensus::{Consensus, ConsensusMsg, Decision, Ready};
 use crate::inbox::Heard;
-use crate::registry::{self, Brain, Note, Out, RadioMsg, Tick};
-
-/// The motion fields of a command: what a reaction starts from and may replace.
-#[derive(Debug, Clone, Copy, Default)]
-struct Motion {
-    v: f64,
-    omega: f64,
-    velocity: [f64; 3],
-    lidar_on: u8,
-}
+use crate::registry::{self, Brain, Decided, Motion, Note, RadioMsg, Tick};
 
 impl Motion {
     fn of(c: &Command) -> Motion {
@@ -25,13 +15,49 @@ impl Motion {
             v: c.v,
             omega: c.omega,
             velocity: [c.vx, c.vy, c.vz],
-            lidar_on: c.lidar_on,
+            lidar_on: c.lidar_on != 0,
         }
     }
 
     fn onto(self, c: &mut Command) {
-        (c.v, c.omega, c.lidar_on) = (self.v, self.omega, self.lidar_on);
+        (c.v, c.omega, c.lidar_on) = (self.v, self.omega, self.lidar_on as u8);
         [c.vx, c.vy, c.vz] = self.velocity;
+    }
+}
+
+/// A robot's answer to one observation, in raft-rs's `Ready` shape: the command, and what
+/// of its persistent Raft state changed and must be durable before the command leaves. The
+/// command is reachable only through [`Step::persist_then`] (or, for a driver that keeps no
+/// storage, [`Step::without_storage`]), so a shell writes before it sends by construction.
+#[derive(Debug)]
+#[must_use = "the command leaves only through `persist_then`"]
+pub struct Step {
+    command: Command,
+    persist: Option<Persist>,
+}
+
+impl Step {
+    /// What must be durable first (`None`: nothing changed, or no stable storage).
+    pub fn persist(&self) -> Option<&Persist> {
+        self.persist.as_ref()
+    }
+
+    /// Hands what must be durable to `save`, then gives the command to send; `save`'s
+    /// error keeps the command back.
+    pub fn persist_then<E>(
+        self,
+        save: impl FnOnce(Persist) -> Result<(), E>,
+    ) -> Result<Command, E> {
+        if let Some(p) = self.persist {
+            save(p)?;
+        }
+        Ok(self.command)
+    }
+
+    /// The command, dropping what should have been made durable: for drivers that keep no
+    /// stable storage (tests; the fuzzer, which takes whole states itself).
+    pub fn without_storage(self) -> Command {
+        self.command
     }
 }
 
@@ -45,6 +71,8 @@ pub struct Agent {
     consensus_inbox: Vec<Heard<ConsensusMsg>>,
     /// This tick's motion as last decided (by `step` or a reaction), for the next reaction.
     decided: Motion,
+    /// What the behaviour decided, a buffer kept from tick to tick.
+    out: Decided,
 }
 
 impl Agent {
@@ -79,6 +107,7 @@ impl Agent {
             heard: Vec::new(),
             consensus_inbox: Vec::new(),
             decided: Motion::default(),
+            out: Decided::default(),
         }
     }
 
@@ -97,11 +126,14 @@ impl Agent {
         self.malformed
     }
 
-    /// Decides this tick's command from this tick's observation.
-    pub fn step(&mut self, obs: &Observation) -> Command {
-        let cmd = self.decide(obs);
-        self.decided = Motion::of(&cmd);
-        cmd
+    /// Decides this tick's command from this tick's observation, with what of its Raft
+    /// state must be durable before the command is sent.
+    pub fn step(&mut self, obs: &Observation) -> Step {
+        let command = self.decide(obs);
+        self.decided = Motion::of(&command);
+        // Taken whether or not the robot was active, so storage follows the core exactly.
+        let persist = self.consensus.as_mut().and_then(Consensus::take_persist);
+        Step { command, persist }
     }
 
     /// Reacts to a propagation round of the tick of `obs` (`radio.rounds`): `frames` reached
@@ -114,12 +146,13 @@ impl Agent {
         if RobotState::from_u8(obs.state) != Some(RobotState::Active) {
             return cmd;
         }
-        self.decided.onto(&mut cmd);
-        let mut notes: Vec<Note> = Vec::new();
-        self.brain.react(obs, &mut self.heard, &mut cmd, &mut notes);
+        self.out.clear();
+        self.brain
+            .react(obs, &mut self.heard, self.decided, &mut self.out);
+        put_behaviour(&mut cmd, &self.out);
         // A reaction's frames all travel within the tick.
         cmd.in_tick = cmd.outbox_len;
-        let _ = cmd.set_notes(&notes);
+        let _ = cmd.set_notes(&self.out.notes);
         self.decided = Motion::of(&cmd);
         cmd
     }
@@ -176,29 +209,63 @@ impl Agent {
             Some(c) => c.step(obs, &self.consensus_inbox),
             None => Vec::new(),
         };
-        let mut notes: Vec<Note> = Vec::new();
-        let mut proposals: Vec<Decision> = Vec::new();
+        self.out.clear();
         let tick = Tick {
             obs,
             heard: &mut self.heard,
             decisions: &decisions,
             leadership: self.consensus.as_ref().and_then(Consensus::leadership),
         };
-        let mut out = Out {
-            notes: &mut notes,
-            proposals: &mut proposals,
-        };
-        self.brain.step(tick, &mut cmd, &mut out);
+        self.brain.step(tick, &mut self.out);
+        put_behaviour(&mut cmd, &self.out);
         match &mut self.consensus {
             Some(c) => {
-                c.propose(&proposals);
-                c.finish(&mut cmd, notes)
+                c.propose(&self.out.proposals);
+                let ready = c.ready(cmd.outbox().len());
+                put_consensus(&mut cmd, ready, &mut self.out.notes);
             }
             // A few small notes always fit the report.
             None => {
-                let _ = cmd.set_notes(&notes);
+                let _ = cmd.set_notes(&self.out.notes);
             }
         }
         cmd
+    }
+}
+
+/// Writes the behaviour's motion and frames into `cmd` (those within the tick first); a
+/// full outbox drops a frame, as the radio would.
+fn put_behaviour(cmd: &mut Command, out: &Decided) {
+    out.motion.onto(cmd);
+    for (k, (dst, msg)) in out.frames.iter().enumerate() {
+        if cmd.push_frame(*dst, msg).is_ok() && k < out.in_tick {
+            cmd.in_tick += 1;
+        }
+    }
+}
+
+/// Writes the consensus layer's frames after the behaviour's, and its notes after the
+/// behaviour's `notes` into the report.
+fn put_consensus(cmd: &mut Command, ready: Ready, notes: &mut Vec<Note>) {
+    for (dst, m) in ready.frames {
+        // `ready` took only the frames left free, and each fits one.
+        let pushed = cmd.push_frame(dst, &RadioMsg::Consensus(m));
+        debug_assert!(pushed.is_ok(), "a consensus frame always fits");
+    }
+    if ready.notes.is_empty() {
+        let _ = cmd.set_notes(notes);
+        return;
+    }
+    let theirs = notes.len();
+    notes.extend(ready.notes.iter().cloned().map(Note::Consensus));
+    if cmd.set_notes(notes).is_err() {
+        // The behaviour used more than its share: consensus notes must reach the record
+        // (the checker rebuilds every log from them), so they win.
+        tracing::warn!(
+            dropped = theirs,
+            "behaviour notes dropped: report full with consensus notes"
+        );
+        let only: Vec<Note> = ready.notes.into_iter().map(Note::Consensus).collect();
+        let _ = cmd.set_notes(&only);
     }
 }

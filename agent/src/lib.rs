@@ -26,7 +26,9 @@
 //! let mut obs = Observation::empty(0, 0);
 //! obs.x = 2.0;
 //! obs.y = 2.0;
-//! let cmd = agent.step(&obs);
+//! let step = agent.step(&obs);
+//! assert!(step.persist().is_none(), "no `[consensus]`: nothing to make durable");
+//! let cmd = step.without_storage();
 //! assert!(cmd.v > 0.0, "the goal is straight ahead");
 //! ```
 #![warn(missing_docs)]
@@ -40,6 +42,6 @@ pub mod overlay;
 pub mod registry;
 pub mod wire;
 
-pub use agent::Agent;
+pub use agent::{Agent, Step};
 pub use registry::{Note, RadioMsg};
 pub use swarmrt_protocol::{Command, Observation};

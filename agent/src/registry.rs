@@ -14,15 +14,15 @@ use std::marker::PhantomData;
 use serde::{Deserialize as _, Serialize};
 use serde_json::Value;
 use swarmrt_protocol::records::Records;
-use swarmrt_protocol::{Command, NoteJson, Observation, RecordedNote, Vocabulary};
+use swarmrt_protocol::{NoteJson, Observation, RecordedNote, Vocabulary};
 use swarmrt_scenario::reference::Schema;
 use swarmrt_scenario::{BehaviourSection, Config, ConfigError, KeyError};
 
 use crate::behaviour::{Act, Behaviour, Params, Series};
 pub use crate::behaviours::{BEHAVIOURS, Note, RadioMsg};
-use crate::consensus::{ConsensusNote, Decision, Leadership, lane};
+use crate::consensus::{ConsensusNote, Decision, Leadership};
 use crate::inbox::Heard;
-use crate::overlay::{Headline, LaneChange, Overlay, RoleDef};
+use crate::overlay::{Headline, LaneChange, Overlay, RoleDef, lane};
 pub use crate::wire::WireTag;
 
 /// Connects a behaviour to its variants of the envelopes (written by `behaviours!`); every
@@ -34,6 +34,8 @@ pub trait Enveloped: Behaviour + Overlay {
     fn unwrap_msg(msg: RadioMsg) -> Option<Self::Msg>;
     /// `note` inside the note envelope.
     fn wrap_note(note: Self::Note) -> Note;
+    /// The behaviour's own note, if `note` is one.
+    fn note_of(note: &Note) -> Option<&Self::Note>;
 }
 
 /// One behaviour of the registry with its types erased.
@@ -43,56 +45,66 @@ pub trait Plugin: Sync {
     /// Parses, defaults and validates the `[behaviour]` parameters; returns them resolved
     /// (every key present, in declaration order).
     fn resolve(&self, params: &toml::Table, cfg: &Config) -> Result<toml::Table, KeyError>;
-    /// Robot `id`'s brain.
-    fn brain(&self, cfg: &Config, id: u32) -> Result<Box<dyn Brain>, KeyError>;
+    /// The behaviour configured for `cfg`: its `[behaviour]` parameters parsed once, for
+    /// everything that needs them. `Err` (the key and why) when they do not parse.
+    fn configure(&self, cfg: &Config) -> Result<Box<dyn Configured>, KeyError>;
     /// Every `[behaviour]` key with its default, as `behaviour.<key>`.
     fn keys(&self) -> Vec<String>;
     /// Its parameters for the config reference (`docs/config.md`): their table and schema.
     fn reference(&self) -> Schema;
     /// Names of the metrics it computes from the records.
     fn metric_names(&self) -> &'static [&'static str];
-    /// Its metrics for a finished run.
-    fn metrics(&self, cfg: &Config, run: &Records) -> Result<Vec<(&'static str, Value)>, KeyError>;
-    /// Its per-tick tables for a finished run.
-    fn series(&self, cfg: &Config, run: &Records) -> Result<Vec<Series>, KeyError>;
     /// The roles a viewer colours its robots by ([`crate::overlay`]); roles are indices.
     fn roles(&self) -> &'static [RoleDef];
-    /// Robot `id`'s role at the start of the run (`None` also when `cfg`'s `[behaviour]`
-    /// does not parse, which a run's resolved `config.toml` always does).
-    fn initial_role(&self, cfg: &Config, id: u32) -> Option<u8>;
-    /// Robot `id`'s role after it reported `note`, the `note` field of an `events.jsonl`
-    /// line as recorded (a behaviour's note as itself, e.g. `{"veto":{...}}`); `None`:
-    /// unchanged, and for consensus notes and notes that are not this behaviour's.
-    fn role_after(&self, cfg: &Config, id: u32, note: &Value) -> Option<u8>;
-    /// `note` (as [`Plugin::role_after`] takes it) as a headline of the event timeline: the
-    /// behaviour's notable notes, and the consensus layer's (`{"consensus":{...}}`: elections,
-    /// quadrant leaders, [`crate::consensus::lane::headline`]).
-    fn headline(&self, note: &Value) -> Option<Headline>;
+    /// A recorded note, the `note` field of an `events.jsonl` line (a behaviour's note as
+    /// itself, e.g. `{"veto":{...}}`; a consensus note as `{"consensus":{...}}`), decoded
+    /// once into the typed envelope; `None` for anything this behaviour and the consensus
+    /// layer never wrote.
+    fn read_note(&self, note: &Value) -> Option<Note>;
+    /// `note` as a headline of the event timeline: the behaviour's notable notes, and the
+    /// consensus layer's (elections, quadrant leaders, [`crate::overlay::lane::headline`]).
+    fn headline(&self, note: &Note) -> Option<Headline>;
     /// How `note` changes the reporter's consensus lane: the consensus layer's notes
-    /// ([`crate::consensus::lane::lane_change`]) and the behaviour's own leader choice
+    /// ([`crate::overlay::lane::lane_change`]) and the behaviour's own leader choice
     /// (grouping's `leader` note).
-    fn lane(&self, note: &Value) -> Option<LaneChange>;
+    fn lane(&self, note: &Note) -> Option<LaneChange>;
+}
+
+/// A behaviour configured for one run, its types erased: its parameters were parsed once,
+/// when it was built ([`Plugin::configure`]).
+pub trait Configured: Send + Sync {
+    /// Robot `id`'s brain.
+    fn brain(&self, id: u32) -> Box<dyn Brain>;
+    /// Its metrics for a finished run.
+    fn metrics(&self, run: &Records) -> Vec<(&'static str, Value)>;
+    /// Its per-tick tables for a finished run.
+    fn series(&self, run: &Records) -> Vec<Series>;
+    /// Robot `id`'s role at the start of the run.
+    fn initial_role(&self, id: u32) -> Option<u8>;
+    /// Robot `id`'s role after it reported `note`; `None`: unchanged, and for consensus
+    /// notes and notes that are not this behaviour's.
+    fn role_after(&self, id: u32, note: &Note) -> Option<u8>;
 }
 
 /// A behaviour driven for one robot, its types erased: the agent hands it the tick's
-/// decoded radio messages and committed decisions, it fills the command and its notes.
+/// decoded radio messages and committed decisions, it answers with a [`Decided`], from which
+/// the agent composes the command.
 pub trait Brain: Send {
     /// [`Behaviour::LISTENS`] of the behaviour inside.
     fn listens(&self) -> bool;
 
-    /// One tick; messages of other kinds are ignored. `leadership` is the election as this
-    /// robot knows it (Raft scenarios); the behaviour's proposals for the log go to
-    /// `proposals`.
-    fn step(&mut self, tick: Tick<'_>, cmd: &mut Command, out: &mut Out<'_>);
+    /// One tick; messages of other kinds are ignored. `out` comes cleared.
+    fn step(&mut self, tick: Tick<'_>, out: &mut Decided);
 
-    /// A propagation round within the tick of `obs`: `cmd` comes with the tick's motion so
-    /// far; the behaviour may change it and send frames (all within the tick).
+    /// A propagation round within the tick of `obs`: the behaviour starts from the tick's
+    /// `motion` so far, may change it and send frames (all within the tick). `out` comes
+    /// cleared.
     fn react(
         &mut self,
         obs: &Observation,
         heard: &mut Vec<Heard<RadioMsg>>,
-        cmd: &mut Command,
-        notes: &mut Vec<Note>,
+        motion: Motion,
+        out: &mut Decided,
     );
 }
 
@@ -108,12 +120,43 @@ pub struct Tick<'a> {
     pub leadership: Option<Leadership>,
 }
 
-/// What a [`Brain`] hands back besides the command.
-pub struct Out<'a> {
+/// The motion fields of a command: what a behaviour decides and a reaction starts from.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Motion {
+    /// Forward speed in m/s.
+    pub v: f64,
+    /// Turn rate in rad/s.
+    pub omega: f64,
+    /// Aerial robots: `[east, north, up]` in m/s.
+    pub velocity: [f64; 3],
+    /// Lidar on for the next observation.
+    pub lidar_on: bool,
+}
+
+/// What a [`Brain`] decided, in the envelopes: the agent writes it into the command.
+#[derive(Debug, Clone, Default)]
+pub struct Decided {
+    /// Wheel speeds (or velocity) and the lidar switch.
+    pub motion: Motion,
+    /// `(destination, message)` in sending order, those within the tick first.
+    pub frames: Vec<(u32, RadioMsg)>,
+    /// How many of `frames` travel within the tick.
+    pub in_tick: usize,
     /// Its notes for the record.
-    pub notes: &'a mut Vec<Note>,
+    pub notes: Vec<Note>,
     /// Its proposals for the replicated log.
-    pub proposals: &'a mut Vec<Decision>,
+    pub proposals: Vec<Decision>,
+}
+
+impl Decided {
+    /// Empties it for the next tick, keeping the buffers.
+    pub fn clear(&mut self) {
+        self.motion = Motion::default();
+        self.frames.clear();
+        self.in_tick = 0;
+        self.notes.clear();
+        self.proposals.clear();
+    }
 }
 
 /// A behaviour as a registry entry (its types erased behind [`Plugin`]).
@@ -163,12 +206,10 @@ impl<B: Enveloped> Plugin for Entry<B> {
         Ok(toml::Table::try_from(&p).expect("parameters always serialize"))
     }
 
-    fn brain(&self, cfg: &Config, id: u32) -> Result<Box<dyn Brain>, KeyError> {
-        let p = parse::<B>(&cfg.behaviour.params)?;
-        Ok(Box::new(Driver::<B> {
-            behaviour: B::new(cfg, &p, id),
-            inbox: Vec::new(),
-            act: Act::default(),
+    fn configure(&self, cfg: &Config) -> Result<Box<dyn Configured>, KeyError> {
+        Ok(Box::new(ConfiguredAs::<B> {
+            params: parse::<B>(&cfg.behaviour.params)?,
+            cfg: cfg.clone(),
         }))
     }
 
@@ -196,43 +237,61 @@ impl<B: Enveloped> Plugin for Entry<B> {
         B::METRICS
     }
 
-    fn metrics(&self, cfg: &Config, run: &Records) -> Result<Vec<(&'static str, Value)>, KeyError> {
-        let p = parse::<B>(&cfg.behaviour.params)?;
-        Ok(B::metrics(cfg, &p, run))
-    }
-
-    fn series(&self, cfg: &Config, run: &Records) -> Result<Vec<Series>, KeyError> {
-        let p = parse::<B>(&cfg.behaviour.params)?;
-        Ok(B::series(cfg, &p, run))
-    }
-
     fn roles(&self) -> &'static [RoleDef] {
         B::ROLES
     }
 
-    fn initial_role(&self, cfg: &Config, id: u32) -> Option<u8> {
-        let p = parse::<B>(&cfg.behaviour.params).ok()?;
-        B::initial_role(cfg, &p, id)
-    }
-
-    fn role_after(&self, cfg: &Config, id: u32, note: &Value) -> Option<u8> {
-        let note = behaviour_note::<B>(note)?;
-        let p = parse::<B>(&cfg.behaviour.params).ok()?;
-        B::role_after(&p, id, &note)
-    }
-
-    fn headline(&self, note: &Value) -> Option<Headline> {
+    fn read_note(&self, note: &Value) -> Option<Note> {
         match lane::from_json(note) {
-            Some(c) => lane::headline(&c),
-            None => B::headline(&behaviour_note::<B>(note)?),
+            Some(c) => Some(Note::Consensus(c)),
+            None => behaviour_note::<B>(note).map(B::wrap_note),
         }
     }
 
-    fn lane(&self, note: &Value) -> Option<LaneChange> {
-        match lane::from_json(note) {
-            Some(c) => lane::lane_change(&c),
-            None => B::lane(&behaviour_note::<B>(note)?),
+    fn headline(&self, note: &Note) -> Option<Headline> {
+        match note {
+            Note::Consensus(c) => lane::headline(c),
+            other => B::headline(B::note_of(other)?),
         }
+    }
+
+    fn lane(&self, note: &Note) -> Option<LaneChange> {
+        match note {
+            Note::Consensus(c) => lane::lane_change(c),
+            other => B::lane(B::note_of(other)?),
+        }
+    }
+}
+
+/// `B` configured for one run: the config and its parameters, parsed once.
+struct ConfiguredAs<B: Behaviour> {
+    cfg: Config,
+    params: B::Params,
+}
+
+impl<B: Enveloped> Configured for ConfiguredAs<B> {
+    fn brain(&self, id: u32) -> Box<dyn Brain> {
+        Box::new(Driver::<B> {
+            behaviour: B::new(&self.cfg, &self.params, id),
+            inbox: Vec::new(),
+            act: Act::default(),
+        })
+    }
+
+    fn metrics(&self, run: &Records) -> Vec<(&'static str, Value)> {
+        B::metrics(&self.cfg, &self.params, run)
+    }
+
+    fn series(&self, run: &Records) -> Vec<Series> {
+        B::series(&self.cfg, &self.params, run)
+    }
+
+    fn initial_role(&self, id: u32) -> Option<u8> {
+        B::initial_role(&self.cfg, &self.params, id)
+    }
+
+    fn role_after(&self, id: u32, note: &Note) -> Option<u8> {
+        B::role_after(&self.params, id, B::note_of(note)?)
     }
 }
 
@@ -256,8 +315,7 @@ impl<B: Enveloped> Brain for Driver<B> {
         B::LISTENS
     }
 
-    fn step(&mut self, tick: Tick<'_>, cmd: &mut Command, out: &mut Out<'_>) {
-        let obs = tick.obs;
+    fn step(&mut self, tick: Tick<'_>, out: &mut Decided) {
         for d in tick.decisions {
             self.behaviour.apply(d);
         }
@@ -266,26 +324,26 @@ impl<B: Enveloped> Brain for Driver<B> {
         }
         self.take_inbox(tick.heard);
         self.act.reset();
-        self.behaviour.step(obs, &self.inbox, &mut self.act);
+        self.behaviour.step(tick.obs, &self.inbox, &mut self.act);
         out.proposals.extend_from_slice(self.act.proposals());
-        self.fill(cmd, out.notes);
+        self.hand_over(out);
     }
 
     fn react(
         &mut self,
         obs: &Observation,
         heard: &mut Vec<Heard<RadioMsg>>,
-        cmd: &mut Command,
-        notes: &mut Vec<Note>,
+        motion: Motion,
+        out: &mut Decided,
     ) {
         self.take_inbox(heard);
         self.act.reset();
-        self.act.v = cmd.v;
-        self.act.omega = cmd.omega;
-        self.act.velocity = [cmd.vx, cmd.vy, cmd.vz];
-        self.act.lidar_on = cmd.lidar_on != 0;
+        self.act.v = motion.v;
+        self.act.omega = motion.omega;
+        self.act.velocity = motion.velocity;
+        self.act.lidar_on = motion.lidar_on;
         self.behaviour.react(obs, &self.inbox, &mut self.act);
-        self.fill(cmd, notes);
+        self.hand_over(out);
     }
 }
 
@@ -302,20 +360,20 @@ impl<B: Enveloped> Driver<B> {
         }));
     }
 
-    /// Writes the act's motion, frames (those within the tick first) and notes into `cmd`.
-    fn fill(&mut self, cmd: &mut Command, notes: &mut Vec<Note>) {
-        cmd.v = self.act.v;
-        cmd.omega = self.act.omega;
-        [cmd.vx, cmd.vy, cmd.vz] = self.act.velocity;
-        cmd.lidar_on = self.act.lidar_on as u8;
-        let (frames, in_tick, mine) = self.act.drain();
-        for (k, (dst, msg)) in frames.into_iter().enumerate() {
-            // A full outbox drops the frame, as the radio would.
-            if cmd.push_frame(dst, &B::wrap_msg(msg)).is_ok() && k < in_tick {
-                cmd.in_tick += 1;
-            }
-        }
-        notes.extend(mine.map(B::wrap_note));
+    /// Hands the act's motion, frames (those within the tick first) and notes over, in
+    /// the envelopes.
+    fn hand_over(&mut self, out: &mut Decided) {
+        out.motion = Motion {
+            v: self.act.v,
+            omega: self.act.omega,
+            velocity: self.act.velocity,
+            lidar_on: self.act.lidar_on,
+        };
+        let (frames, in_tick, notes) = self.act.drain();
+        out.in_tick = in_tick;
+        out.frames
+            .extend(frames.into_iter().map(|(dst, m)| (dst, B::wrap_msg(m))));
+        out.notes.extend(notes.map(B::wrap_note));
     }
 }
 
@@ -384,9 +442,15 @@ pub fn from_toml_str(file: &str, text: &str, overrides: &[String]) -> Result<Con
 
 /// Robot `id`'s brain for this scenario; `Err` for a `[behaviour]` no behaviour accepts.
 pub fn brain(cfg: &Config, id: u32) -> Result<Box<dyn Brain>, KeyError> {
+    Ok(configure(cfg)?.brain(id))
+}
+
+/// The behaviour of `cfg` configured for it ([`Plugin::configure`]); `Err` for a
+/// `[behaviour]` no behaviour accepts.
+pub fn configure(cfg: &Config) -> Result<Box<dyn Configured>, KeyError> {
     plugin(&cfg.behaviour.kind)
         .ok_or_else(|| unknown_kind(&cfg.behaviour.kind))?
-        .brain(cfg, id)
+        .configure(cfg)
 }
 
 /// Every `[behaviour]` key of every behaviour (`behaviour.<key>`), sorted, without repeats.
@@ -531,6 +595,12 @@ macro_rules! behaviours {
                 }
                 fn wrap_note(note: Self::Note) -> Note {
                     Note::$variant(note)
+                }
+                fn note_of(note: &Note) -> Option<&Self::Note> {
+                    match note {
+                        Note::$variant(n) => Some(n),
+                        _ => None,
+                    }
                 }
             }
         )+

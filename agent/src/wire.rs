@@ -12,7 +12,7 @@
 //! of [`WireTag`]), nor does a tag of 128 or more (which would take two bytes and could start
 //! with [`OPAQUE_TAG`]). The constants of other languages are generated from [`tags`]
 //! ([`python_module`], [`c_header`]) and compared with the committed files by
-//! `agent/tests/wire_tags.rs`.
+//! `agent/tests/agent/wire_tags.rs`.
 //!
 //! [`RadioMsg`]: crate::RadioMsg
 //! [`Note`]: crate::Note
@@ -160,7 +160,7 @@ pub fn python_module() -> String {
         "\"\"\"swarmrt radio and note envelope tags: the first byte of a postcard `RadioMsg`\n\
          (and of each `Note` of a report).\n\n\
          GENERATED from the Rust registry by swarmrt_agent::wire; do not edit\n\
-         (SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test wire_tags rewrites it).\n\
+         (SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test agent wire_tags rewrites it).\n\
          The tags are declared in agent/src/behaviours/mod.rs and never move.\n\"\"\"\n\n",
     );
     for (name, tag) in tags() {
@@ -182,7 +182,7 @@ pub fn c_header() -> String {
     let mut out = String::from(
         "/* swarmrt radio and note envelope tags: the first byte of a postcard RadioMsg (and of\n \
          * each Note of a report). GENERATED from the Rust registry by swarmrt_agent::wire; do\n \
-         * not edit (SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test wire_tags\n \
+         * not edit (SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test agent wire_tags\n \
          * rewrites it). The tags are declared in agent/src/behaviours/mod.rs and never move. */\n\
          #ifndef SWARMRT_TAGS_H\n#define SWARMRT_TAGS_H\n\n",
     );

@@ -28,8 +28,9 @@ pub fn from_records(cfg: &Config, dir: &Path) -> anyhow::Result<Value> {
     });
     if let Some(p) = swarmrt_agent::registry::plugin(&cfg.behaviour.kind) {
         let own = p
-            .metrics(cfg, &rec)
-            .map_err(|(key, message)| anyhow::anyhow!("key `{key}`: {message}"))?;
+            .configure(cfg)
+            .map_err(|(key, message)| anyhow::anyhow!("key `{key}`: {message}"))?
+            .metrics(&rec);
         for (k, v) in own {
             out[k] = v;
         }

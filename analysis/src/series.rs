@@ -17,8 +17,10 @@ pub fn from_records(cfg: &Config, dir: &Path) -> anyhow::Result<Vec<Series>> {
         return Ok(Vec::new());
     };
     let rec = crate::run_dir::read(dir)?;
-    p.series(cfg, &rec)
-        .map_err(|(key, message)| anyhow::anyhow!("key `{key}`: {message}"))
+    let configured = p
+        .configure(cfg)
+        .map_err(|(key, message)| anyhow::anyhow!("key `{key}`: {message}"))?;
+    Ok(configured.series(&rec))
 }
 
 /// `s` as CSV: the header, then one line per row.

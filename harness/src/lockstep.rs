@@ -2,6 +2,7 @@
 //! order the process shells call them, so both modes write byte-identical records.
 
 use swarmrt_agent::Agent;
+use swarmrt_agent::Step;
 use swarmrt_agent::consensus::raft::{MutantScope, Persistent};
 use swarmrt_protocol::control::ProcessFault;
 use swarmrt_protocol::{Command, Observation, RobotState};
@@ -18,20 +19,26 @@ type Answering<'a> = (
 );
 
 /// Robot `o.robot` answers its observation, if its process would run: its command, and with
-/// storage on, the persistent state its process would have written first.
+/// storage on, the change of persistent state its process would have written first.
 fn answer(
     agent: &mut Agent,
     o: &Observation,
     stored: &mut Option<Persistent>,
     command: &mut Option<Command>,
-    storing: bool,
 ) {
     if RobotState::from_u8(o.state).is_some_and(RobotState::expects_command) {
-        *command = Some(agent.step(o));
-        if storing {
-            *stored = agent.consensus().and_then(|c| c.persistent());
-        }
+        *command = Some(store_then_send(agent.step(o), stored));
     }
+}
+
+/// The command of `step` once its change is applied to the robot's stored state (the first
+/// change applies to the empty state), as its process would make it durable first.
+fn store_then_send(step: Step, stored: &mut Option<Persistent>) -> Command {
+    let Ok(cmd) = step.persist_then(|change| {
+        stored.get_or_insert_default().apply(&change);
+        Ok::<(), std::convert::Infallible>(())
+    });
+    cmd
 }
 
 /// A world and its robots, stepped tick by tick.
@@ -44,7 +51,6 @@ pub struct Lockstep {
     /// Each robot's stable storage (`consensus.storage`): the persistent Raft state its
     /// process would have written before sending this tick's command.
     stored: Vec<Option<Persistent>>,
-    storing: bool,
     /// Whether the robots answered the last observations already (in [`Lockstep::observe`]).
     answered: bool,
     /// Whether [`Lockstep::observe`] fills `obs` ([`Lockstep::keep_observations`]).
@@ -64,7 +70,6 @@ impl Lockstep {
             obs: vec![Observation::empty(0, 0); n],
             commands: Vec::with_capacity(n),
             stored: vec![None; n],
-            storing: swarmrt_agent::consensus::stores_state(cfg),
             answered: false,
             keep_observations: false,
         })
@@ -122,7 +127,6 @@ impl Lockstep {
         let n = self.agents.len();
         self.commands.clear();
         self.commands.resize(n, None);
-        let storing = self.storing;
         // The Raft mutant selection (tests) is carried onto the observing threads.
         let mutant = MutantScope::current();
         let mut robots: Vec<Answering<'_>> = self
@@ -136,7 +140,7 @@ impl Lockstep {
         let then = |_: usize, o: &Observation, robot: &mut Answering<'_>| {
             mutant.enter();
             let (agent, stored, command) = robot;
-            answer(agent, o, stored, command, storing);
+            answer(agent, o, stored, command);
         };
         // The propagation rounds read the observations again (reactions); otherwise nothing
         // does, and each thread fills one of its own robot after robot.
@@ -167,7 +171,7 @@ impl Lockstep {
             .zip(&mut self.stored)
             .zip(&mut self.commands)
         {
-            answer(a, o, stored, cmd, self.storing);
+            answer(a, o, stored, cmd);
         }
     }
 

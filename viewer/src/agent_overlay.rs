@@ -2,23 +2,24 @@
 //! folder says what its notes mean (`agent/src/behaviours/<name>/overlay.rs`).
 
 use serde_json::Value;
-use swarmrt_agent::registry::Plugin;
+use swarmrt_agent::registry::{Configured, Plugin};
 use swarmrt_scenario::Config;
 
 use crate::overlay::{Headline, LaneChange, Overlay, RoleDef};
 
 /// The overlay of the config's behaviour (none for a kind the registry does not know, which
-/// a loaded config cannot have).
+/// a loaded config cannot have), its parameters parsed once.
 pub fn for_config(cfg: &Config) -> Box<dyn Overlay> {
+    let plugin = swarmrt_agent::registry::plugin(&cfg.behaviour.kind);
     Box::new(Registered {
-        plugin: swarmrt_agent::registry::plugin(&cfg.behaviour.kind),
-        cfg: cfg.clone(),
+        configured: plugin.and_then(|p| p.configure(cfg).ok()),
+        plugin,
     })
 }
 
 struct Registered {
     plugin: Option<&'static dyn Plugin>,
-    cfg: Config,
+    configured: Option<Box<dyn Configured>>,
 }
 
 impl Overlay for Registered {
@@ -26,15 +27,18 @@ impl Overlay for Registered {
         self.plugin.map(|p| p.roles()).unwrap_or(&[])
     }
     fn initial_role(&self, id: u32) -> Option<u8> {
-        self.plugin?.initial_role(&self.cfg, id)
+        self.configured.as_ref()?.initial_role(id)
     }
     fn role_after(&self, id: u32, note: &Value) -> Option<u8> {
-        self.plugin?.role_after(&self.cfg, id, note)
+        let note = self.plugin?.read_note(note)?;
+        self.configured.as_ref()?.role_after(id, &note)
     }
     fn headline(&self, note: &Value) -> Option<Headline> {
-        self.plugin?.headline(note)
+        let p = self.plugin?;
+        p.headline(&p.read_note(note)?)
     }
     fn lane(&self, note: &Value) -> Option<LaneChange> {
-        self.plugin?.lane(note)
+        let p = self.plugin?;
+        p.lane(&p.read_note(note)?)
     }
 }

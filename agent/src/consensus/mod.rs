@@ -4,8 +4,10 @@
 //! The cores are pure state machines (no I/O, no clock, randomness seeded from the run seed
 //! and robot id). [`Consensus`] is the thin layer the [`crate::Agent`] calls once per tick:
 //! it feeds the tick's radio messages and the passage of time to the core, proposes the
-//! scheduled decisions, hands back the decisions to act on, and puts the core's messages into
-//! the command's spare radio frames and its notes into the command's report.
+//! scheduled decisions, hands back the decisions to act on, and returns what the core has to
+//! say ([`Ready`]: its frames and notes, which the agent puts into the command) and what of
+//! its state must be durable first ([`Consensus::take_persist`]). It knows nothing of the
+//! behaviours' envelopes: the arrows run from the agent to here, never back.
 //!
 //! Scheduled proposals are not forwarded: every robot has the schedule (it is in the config),
 //! so the robot that is leader at the proposal's tick, or the first one after it, proposes
@@ -34,25 +36,25 @@
 //! assert!(notes.as_slice().iter().any(|n| matches!(n, ConsensusNote::Apply { index: 2, .. })));
 //! ```
 
-pub mod lane;
 pub mod log;
 pub mod messages;
 pub mod notes;
+pub mod persist;
 pub mod quadrant;
 pub mod raft;
 pub mod storage;
 
 use rand::Rng as _;
-use swarmrt_protocol::{Command, MAX_REPORT, Observation};
+use swarmrt_protocol::{MAX_REPORT, Observation};
 use swarmrt_scenario::Config;
 use swarmrt_scenario::consensus::{Algorithm, ConsensusConfig};
 
 use crate::inbox::Heard;
-use crate::registry::{Note, RadioMsg};
 pub use messages::{ConsensusMsg, Decision, Entry, Item, ROUTE_PART_MOVES, RoutePart, UNSCHEDULED};
 pub use notes::{ConsensusNote, RecordedNote, Role, SentCounts, behaviour_notes};
+use persist::{Persist, Persistent};
 use quadrant::Quadrant;
-use raft::{Persistent, Raft, RaftParams};
+use raft::{Raft, RaftParams};
 
 /// What a behaviour knows of the election (Raft only).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -136,6 +138,16 @@ impl Notes {
     }
 }
 
+/// What the consensus layer has to say at the end of a tick: its frames, to send after the
+/// behaviour's, and its notes, to report after the behaviour's.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Ready {
+    /// `(destination, message)`, at most the frames the behaviour left free.
+    pub frames: Vec<(u32, ConsensusMsg)>,
+    /// This tick's notes, within [`NOTE_BUDGET`].
+    pub notes: Vec<ConsensusNote>,
+}
+
 enum Core {
     Raft(Box<Raft>),
     Quadrant(Quadrant),
@@ -153,6 +165,8 @@ pub struct Consensus {
     sent_noted: SentCounts,
     stats_every: u64,
     capacity: usize,
+    /// Whether the robot keeps its Raft state in stable storage ([`stores_state`]).
+    durable: bool,
     tick: u64,
     /// The behaviour's proposals appended last tick ([`Leadership::appended`]).
     appended: usize,
@@ -255,6 +269,7 @@ impl Consensus {
             sent_noted: SentCounts::default(),
             stats_every: c.stats_every.max(1) as u64,
             capacity: cfg.radio.capacity as usize,
+            durable: stores_state(cfg),
             tick: 0,
             appended: 0,
         })
@@ -276,9 +291,19 @@ impl Consensus {
         }
     }
 
-    /// What must survive a crash (Raft only).
+    /// What must survive a crash (Raft only), whole: a clone of the log, for checks and
+    /// tests (a tick hands over only what changed, [`Consensus::take_persist`]).
     pub fn persistent(&self) -> Option<Persistent> {
         self.raft().map(|r| r.persistent())
+    }
+
+    /// What changed of the persistent Raft state since the last call, when the robot keeps
+    /// it in stable storage: durable before this tick's command leaves. `None` otherwise.
+    pub fn take_persist(&mut self) -> Option<Persist> {
+        match &mut self.core {
+            Core::Raft(r) if self.durable => r.take_persist(),
+            _ => None,
+        }
     }
 
     /// Messages sent so far, per kind.
@@ -356,7 +381,7 @@ impl Consensus {
         let Core::Raft(r) = &mut self.core else {
             return 0;
         };
-        // The statistics note `finish` may add must still fit.
+        // The statistics note `ready` may add must still fit.
         let stats = sent_note_bound();
         self.notes.reserve(stats);
         let mut done = 0;
@@ -371,42 +396,25 @@ impl Consensus {
         done
     }
 
-    /// Puts this tick's messages into the command's free frames (up to `radio.capacity`) and
-    /// this tick's notes into its report, after the behaviour's `notes`.
-    pub fn finish(&mut self, cmd: &mut Command, mut all: Vec<Note>) {
-        let budget = self.capacity.saturating_sub(cmd.outbox().len());
-        let msgs = match &mut self.core {
+    /// What the core has to say this tick: its messages for the frames the behaviour left
+    /// free (`used` of `radio.capacity` are taken; every message fits a frame, so all of them
+    /// are sent and counted), and its notes, with the statistics note when it is due.
+    pub fn ready(&mut self, used: usize) -> Ready {
+        let budget = self.capacity.saturating_sub(used);
+        let frames = match &mut self.core {
             Core::Raft(r) => r.ready(budget),
             Core::Quadrant(q) => q.ready(budget),
         };
-        for (dst, m) in msgs {
-            let msg = RadioMsg::Consensus(m);
-            if cmd.push_frame(dst, &msg).is_ok()
-                && let RadioMsg::Consensus(m) = &msg
-            {
-                self.sent.count(m);
-            }
+        for (_, m) in &frames {
+            self.sent.count(m);
         }
         if self.tick.is_multiple_of(self.stats_every) && self.sent != self.sent_noted {
             self.sent_noted = self.sent;
             self.notes.push(ConsensusNote::Sent(self.sent));
         }
-        let mine = self.notes.take();
-        if mine.is_empty() {
-            let _ = cmd.set_notes(&all);
-            return;
-        }
-        let theirs = all.len();
-        all.extend(mine.iter().cloned().map(Note::Consensus));
-        if cmd.set_notes(&all).is_err() {
-            // The behaviour used more than its share: consensus notes must reach the record
-            // (the checker rebuilds every log from them), so they win.
-            tracing::warn!(
-                dropped = theirs,
-                "behaviour notes dropped: report full with consensus notes"
-            );
-            let only: Vec<Note> = mine.into_iter().map(Note::Consensus).collect();
-            let _ = cmd.set_notes(&only);
+        Ready {
+            frames,
+            notes: self.notes.take(),
         }
     }
 }

@@ -3,8 +3,9 @@
 //!
 //! Shaped like tikv/raft-rs's `RawNode`: the core never sends, sleeps or reads a clock. Time
 //! enters as [`Raft::tick`], messages as [`Raft::step`], and the caller takes the messages to
-//! send with [`Raft::ready`]. Its one random draw (the election timeout) comes from an RNG the
-//! caller seeded from the run seed.
+//! send with [`Raft::ready`] and what changed of the persistent state with
+//! [`Raft::take_persist`], which it makes durable before those messages leave. Its one
+//! random draw (the election timeout) comes from an RNG the caller seeded from the run seed.
 //!
 //! Adapted to a lossy broadcast radio with a few frames per tick:
 //! - the leader broadcasts AppendEntries (every follower whose log matches at `prev_index`
@@ -23,6 +24,7 @@ use rand::Rng as _;
 use swarmrt_protocol::{BROADCAST, MAX_PAYLOAD};
 
 use super::log::Log;
+pub use super::persist::{HardState, LogSuffix, Persist, Persistent};
 use super::{Notes, Rng};
 
 /// Known bugs the fuzzer must catch (issue 18). Compiled only with the `mutants` feature, and
@@ -139,20 +141,6 @@ pub struct RaftParams {
     pub check_quorum: bool,
 }
 
-/// What a robot must keep across a crash (Figure 2: "persistent state on all servers", plus
-/// the commit index as raft-rs's `HardState` does).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Persistent {
-    /// Current term.
-    pub term: u64,
-    /// Vote in that term.
-    pub vote: Option<u32>,
-    /// Commit index.
-    pub commit: u64,
-    /// The log.
-    pub log: Log,
-}
-
 /// Result of [`Raft::propose`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Proposed {
@@ -208,28 +196,26 @@ pub struct Raft {
     noted: (u64, Role, Option<u32>),
     left_for_notes: u64,
     unsent: u64,
+    /// The hard state as last handed over by [`Raft::take_persist`]; `None` until the first
+    /// hand-over of a new core, whose state was never written.
+    stable: Option<HardState>,
+    /// The lowest log index changed since the last hand-over.
+    unstable_from: Option<u64>,
 }
 
 impl Raft {
     /// A fresh member `id` with an empty log.
     pub fn new(id: u32, p: RaftParams, rng: Rng) -> Raft {
-        Raft::restore(
-            id,
-            p,
-            Persistent {
-                term: 0,
-                vote: None,
-                commit: 0,
-                log: Log::new(),
-            },
-            rng,
-        )
+        let mut r = Raft::restore(id, p, Persistent::default(), rng);
+        r.stable = None;
+        r
     }
 
     /// A member restarting from its persistent state: a follower that re-applies its
     /// committed entries from index 1 (the state machine is volatile, section 5 / Figure 2).
     pub fn restore(id: u32, p: RaftParams, s: Persistent, rng: Rng) -> Raft {
         let n = p.n.max(1) as usize;
+        let stable = Some(s.hard_state());
         let commit = s.commit.min(s.log.last_index());
         let mut r = Raft {
             id,
@@ -259,6 +245,8 @@ impl Raft {
             noted: (s.term, Role::Follower, s.vote),
             left_for_notes: 0,
             unsent: 0,
+            stable,
+            unstable_from: None,
         };
         r.reset_timeout();
         r
@@ -274,7 +262,8 @@ impl Raft {
         }
     }
 
-    /// What must survive a crash.
+    /// What must survive a crash, whole (a clone of the log: for checks and tests; a step
+    /// hands over only what changed, [`Raft::take_persist`]).
     pub fn persistent(&self) -> Persistent {
         Persistent {
             term: self.term,
@@ -282,6 +271,48 @@ impl Raft {
             commit: self.commit,
             log: self.log.clone(),
         }
+    }
+
+    /// The hard state now.
+    pub fn hard_state(&self) -> HardState {
+        HardState {
+            term: self.term,
+            vote: self.vote,
+            commit: self.commit,
+        }
+    }
+
+    /// What changed in the persistent state since the last call (a new core's first call
+    /// hands over its hard state): to be made durable before any message sent since then
+    /// leaves. `None` when nothing changed.
+    pub fn take_persist(&mut self) -> Option<Persist> {
+        let now = self.hard_state();
+        let hard = (self.stable != Some(now)).then_some(now);
+        let log = self.unstable_from.take().map(|first| LogSuffix {
+            first,
+            entries: self.log.from(first).to_vec(),
+        });
+        if hard.is_none() && log.is_none() {
+            return None;
+        }
+        self.stable = Some(now);
+        Some(Persist { hard, log })
+    }
+
+    /// Appends `e` to the log, remembering the change for [`Raft::take_persist`].
+    fn log_push(&mut self, e: Entry) {
+        self.log.push(e);
+        self.touched(self.log.last_index());
+    }
+
+    /// Truncates the log from `index` on, remembering the change.
+    fn log_truncate(&mut self, index: u64) {
+        self.log.truncate_from(index);
+        self.touched(index);
+    }
+
+    fn touched(&mut self, index: u64) {
+        self.unstable_from = Some(self.unstable_from.map_or(index, |f| f.min(index)));
     }
 
     /// Current term.
@@ -536,7 +567,7 @@ impl Raft {
             term: self.term,
             item,
         };
-        self.log.push(e);
+        self.log_push(e);
         let index = self.log.last_index();
         self.progress[self.id as usize].matched = index;
         notes.push(ConsensusNote::Append {
@@ -838,12 +869,12 @@ impl Raft {
                 Some(_) if mutant!(KeepConflictingEntries) => continue,
                 Some(_) => {
                     // Step 3: a conflicting entry and all that follow it go.
-                    self.log.truncate_from(index);
+                    self.log_truncate(index);
                     notes.push(ConsensusNote::Truncate { index });
                 }
                 None => {}
             }
-            self.log.push(*e);
+            self.log_push(*e);
             notes.push(ConsensusNote::Append {
                 index,
                 term: e.term,

@@ -4,7 +4,8 @@
 //! One file per robot, `raft-<id>.state`: an append-only sequence of records, each a whole
 //! snapshot of [`Persistent`] framed as `[len: u32 LE][crc32: u32 LE][postcard bytes]`. A save
 //! appends one record and `fsync`s before the caller lets any message that depends on it
-//! leave (write-ahead). A new file is made durable with its directory (`fsync` of the
+//! leave (write-ahead). A robot's tick hands over only what changed ([`Persist`]); the store
+//! keeps the last state to apply it to, so a record is still the whole state. A new file is made durable with its directory (`fsync` of the
 //! directory too).
 //!
 //! Loading ([`scan`]) tells a torn tail from corruption. Only the last record can be torn by a
@@ -31,7 +32,7 @@ use swarmrt_scenario::safe_fs::{Open, OutDir};
 
 use super::log::Log;
 use super::messages::Entry;
-use super::raft::Persistent;
+use super::persist::{HardState, Persist, Persistent};
 
 /// A file larger than this is compacted to one record on the next save.
 pub const COMPACT_BYTES: u64 = 256 * 1024;
@@ -45,13 +46,37 @@ struct Stored {
     entries: Vec<Entry>,
 }
 
+/// [`Stored`] as it is written, borrowing the log in two pieces (a kept prefix and a new
+/// tail) so that no log is copied to write it: the same bytes as `Stored`.
+#[derive(Serialize)]
+struct StoredRef<'a> {
+    term: u64,
+    vote: Option<u32>,
+    commit: u64,
+    entries: Pieces<'a>,
+}
+
+/// Two slices written as one sequence.
+struct Pieces<'a>(&'a [Entry], &'a [Entry]);
+
+impl Serialize for Pieces<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.0.iter().chain(self.1))
+    }
+}
+
 /// `state` framed as one record.
 pub fn encode_record(state: &Persistent) -> Vec<u8> {
-    let stored = Stored {
-        term: state.term,
-        vote: state.vote,
-        commit: state.commit,
-        entries: state.log.entries().to_vec(),
+    encode(state.hard_state(), state.log.entries(), &[])
+}
+
+/// The state `hard` with the log `kept ++ tail`, framed as one record.
+fn encode(hard: HardState, kept: &[Entry], tail: &[Entry]) -> Vec<u8> {
+    let stored = StoredRef {
+        term: hard.term,
+        vote: hard.vote,
+        commit: hard.commit,
+        entries: Pieces(kept, tail),
     };
     let body = postcard::to_allocvec(&stored).expect("the persistent state always encodes");
     let mut out = Vec::with_capacity(body.len() + 8);
@@ -304,18 +329,45 @@ impl Store {
         if self.last.as_ref() == Some(state) {
             return Ok(());
         }
-        let record = encode_record(state);
+        self.write(&encode_record(state))?;
+        self.last = Some(state.clone());
+        Ok(())
+    }
+
+    /// Makes the last saved state with `change` applied durable (the first change of a new
+    /// store applies to the empty state): appends it as one record and syncs it. Only after
+    /// this returns may messages that depend on it be sent. The log is not copied: the
+    /// record is written from the kept prefix and the change's tail.
+    pub fn persist(&mut self, change: &Persist) -> std::io::Result<()> {
+        let last = self.last.get_or_insert_with(Persistent::default);
+        let hard = change.hard.unwrap_or(last.hard_state());
+        let record = match &change.log {
+            Some(tail) => {
+                let keep = usize::try_from(tail.first.saturating_sub(1)).unwrap_or(usize::MAX);
+                let entries = last.log.entries();
+                encode(hard, &entries[..keep.min(entries.len())], &tail.entries)
+            }
+            None => encode(hard, last.log.entries(), &[]),
+        };
+        self.write(&record)?;
+        if let Some(last) = &mut self.last {
+            last.apply(change);
+        }
+        Ok(())
+    }
+
+    /// Appends `record` and syncs it, or compacts the file to it when it would grow too big.
+    fn write(&mut self, record: &[u8]) -> std::io::Result<()> {
         if self.len + record.len() as u64 > COMPACT_BYTES {
-            self.compact(&record)?;
+            self.compact(record)
         } else {
             use std::io::Seek;
             self.file.seek(std::io::SeekFrom::Start(self.len))?;
-            self.file.write_all(&record)?;
+            self.file.write_all(record)?;
             self.file.sync_data()?;
             self.len += record.len() as u64;
+            Ok(())
         }
-        self.last = Some(state.clone());
-        Ok(())
     }
 
     /// Replaces the file by one record, atomically.
@@ -503,5 +555,43 @@ mod tests {
             "{e}"
         );
         assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep");
+    }
+
+    #[test]
+    fn a_store_fed_changes_writes_the_bytes_of_one_fed_whole_states() {
+        let dir = tempfile::tempdir().unwrap();
+        let (mut whole, _) = Store::open(&dir.path().join("whole"), 1).unwrap();
+        let (mut changes, _) = Store::open(&dir.path().join("changes"), 1).unwrap();
+        let s1 = state(1, 4);
+        // A new leader's entry replaces the fourth; then only the commit index moves.
+        let mut s2 = state(2, 3);
+        let replaced = Entry {
+            term: 2,
+            item: Item::Noop,
+        };
+        s2.log.push(replaced);
+        let s3 = Persistent {
+            commit: 3,
+            ..s2.clone()
+        };
+        let c2 = Persist {
+            hard: Some(s2.hard_state()),
+            log: Some(super::super::persist::LogSuffix {
+                first: 4,
+                entries: vec![replaced],
+            }),
+        };
+        let c3 = Persist {
+            hard: Some(s3.hard_state()),
+            log: None,
+        };
+        for (s, c) in [(&s1, &Persist::whole(&s1)), (&s2, &c2), (&s3, &c3)] {
+            whole.save(s).unwrap();
+            changes.persist(c).unwrap();
+        }
+        let bytes = |s: &Store| std::fs::read(s.path()).unwrap();
+        assert_eq!(bytes(&changes), bytes(&whole));
+        let reopened = Store::open(&dir.path().join("changes"), 1).unwrap().1;
+        assert_eq!(reopened, Some(s3));
     }
 }

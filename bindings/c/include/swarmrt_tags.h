@@ -1,6 +1,6 @@
 /* swarmrt radio and note envelope tags: the first byte of a postcard RadioMsg (and of
  * each Note of a report). GENERATED from the Rust registry by swarmrt_agent::wire; do
- * not edit (SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test wire_tags
+ * not edit (SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test agent wire_tags
  * rewrites it). The tags are declared in agent/src/behaviours/mod.rs and never move. */
 #ifndef SWARMRT_TAGS_H
 #define SWARMRT_TAGS_H

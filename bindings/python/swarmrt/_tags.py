@@ -2,7 +2,7 @@
 (and of each `Note` of a report).
 
 GENERATED from the Rust registry by swarmrt_agent::wire; do not edit
-(SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test wire_tags rewrites it).
+(SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test agent wire_tags rewrites it).
 The tags are declared in agent/src/behaviours/mod.rs and never move.
 """
 

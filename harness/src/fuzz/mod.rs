@@ -274,7 +274,8 @@ impl Sim {
                     .is_some_and(|r| r.role() == Role::Leader)
             };
             let led = leading(agent);
-            let cmd = agent.step(&obs);
+            // The fuzzer models stable storage with whole states (`before`, `crash`).
+            let cmd = agent.step(&obs).without_storage();
             if let Some(except) = self.crash_on_winning
                 && except != Some(i as u32)
                 && !led

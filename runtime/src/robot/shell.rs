@@ -108,17 +108,16 @@ pub fn run(
             if !RobotState::from_u8(obs.state).is_some_and(RobotState::expects_command) {
                 continue;
             }
-            let cmd = agent.step(obs);
+            let step = agent.step(obs);
             if rounds.is_some() {
                 answered = Some((Box::new(*obs), 0));
             }
             drop(sample);
-            if let (Some(store), Some(state)) = (
-                store.as_mut(),
-                agent.consensus().and_then(|c| c.persistent()),
-            ) {
-                store.save(&state)?;
-            }
+            // Write-ahead: the command is handed out only once its state change is durable.
+            let cmd = step.persist_then(|change| match store.as_mut() {
+                Some(store) => store.persist(&change),
+                None => Ok(()),
+            })?;
             #[cfg(feature = "misbehave")]
             let cmd = match misbehave {
                 Some(m) => m.corrupted(cmd, id, cfg, &ports)?,

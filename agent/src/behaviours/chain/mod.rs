@@ -592,3 +592,6 @@ impl Behaviour for Chain {
         metrics::series(cfg, params, run)
     }
 }
+
+#[cfg(test)]
+mod tests;

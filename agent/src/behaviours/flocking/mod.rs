@@ -222,3 +222,6 @@ impl Behaviour for Flocking {
         vec![metrics::series(cfg, params, run)]
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -387,3 +387,6 @@ impl Behaviour for Formation {
         );
     }
 }
+
+#[cfg(test)]
+mod tests;

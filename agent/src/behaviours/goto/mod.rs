@@ -256,3 +256,6 @@ impl Behaviour for Goto {
         act.omega = omega.clamp(-self.max_turn, self.max_turn);
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -876,3 +876,6 @@ impl Behaviour for Grouping {
         metrics::metrics(cfg, params, run)
     }
 }
+
+#[cfg(test)]
+mod tests;

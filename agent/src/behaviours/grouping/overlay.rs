@@ -7,7 +7,7 @@ use swarmrt_scenario::Config;
 
 use super::messages::GroupNote;
 use super::params::GroupingParams;
-use crate::consensus::lane::{quadrant_headline, quadrant_lane};
+use crate::overlay::lane::{quadrant_headline, quadrant_lane};
 use crate::overlay::{Headline, LaneChange, Overlay, RoleDef};
 
 /// Still gathering (layer 1): nobody within the clustering threshold yet.

@@ -628,3 +628,6 @@ impl Behaviour for Planner {
         metrics::metrics(cfg, params, run)
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -4,12 +4,9 @@
 //! valid and its resolved TOML loads back to the same config.
 //!
 //! The seed is fixed (see `common::mutate::runner`); explore further with e.g.
-//! `PROPTEST_CASES=100000 PROPTEST_RNG_SEED=7 cargo test -p swarmrt-agent --test config_fuzz`.
+//! `PROPTEST_CASES=100000 PROPTEST_RNG_SEED=7 cargo test -p swarmrt-agent --test agent config_fuzz`.
 
-#[path = "common/mutate.rs"]
-mod mutate;
-
-use mutate::{mutated_config, override_arg, random_text, runner};
+use crate::mutate::{mutated_config, override_arg, random_text, runner};
 use proptest::prelude::*;
 use swarmrt_agent::registry;
 use swarmrt_scenario::ConfigError;
@@ -74,7 +71,7 @@ proptest! {
 
     #[test]
     fn random_overrides_load_or_fail_in_one_line(
-        (_name, text) in prop::sample::select(mutate::real_configs()),
+        (_name, text) in prop::sample::select(crate::mutate::real_configs()),
         overrides in prop::collection::vec(override_arg(), 1..4),
     ) {
         check_load(&text, &overrides)?;
@@ -92,7 +89,7 @@ proptest! {
 
 #[test]
 fn every_real_config_loads_and_round_trips() {
-    for (name, text) in mutate::real_configs() {
+    for (name, text) in crate::mutate::real_configs() {
         let cfg = registry::from_toml_str(&name, &text, &[]).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(registry::from_toml_str(&name, &cfg.to_toml(), &[]), Ok(cfg));
     }

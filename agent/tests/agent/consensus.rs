@@ -2,6 +2,7 @@
 //! frames stay within their budgets, a knocked-down robot decides nothing.
 
 use swarmrt_agent::Agent;
+use swarmrt_agent::consensus::persist::Persistent;
 use swarmrt_agent::consensus::{ConsensusMsg, ConsensusNote, Item, Role};
 use swarmrt_agent::{Note, RadioMsg};
 use swarmrt_protocol::{BROADCAST, MAX_REPORT, Neighbour, Observation, RobotState};
@@ -63,7 +64,7 @@ goal = [2.0, 18.0]
 "#,
     );
     let mut a = Agent::new(&cfg, 0);
-    let first = a.step(&obs(0));
+    let first = a.step(&obs(0)).without_storage();
     assert!(
         matches!(
             consensus_notes(&first)[0],
@@ -73,7 +74,7 @@ goal = [2.0, 18.0]
     );
     let mut applied_at = None;
     for t in 1..200 {
-        let cmd = a.step(&obs(t));
+        let cmd = a.step(&obs(t)).without_storage();
         let notes = consensus_notes(&cmd);
         if notes
             .iter()
@@ -145,7 +146,7 @@ goal = [5.0, 5.0]
                 o.inbox[k] = *f;
                 o.inbox_len = k as u16 + 1;
             }
-            let cmd = a.step(&o);
+            let cmd = a.step(&o).without_storage();
             assert!(cmd.outbox().len() <= 2, "radio.capacity");
             assert!(cmd.report_len as usize <= MAX_REPORT);
             for f in cmd.outbox() {
@@ -206,7 +207,7 @@ pre_vote = false
     let mut a = Agent::new(&cfg, 0);
     let mut t = 0;
     while a.consensus().unwrap().raft().unwrap().role() != Role::Candidate {
-        a.step(&Observation::empty(0, t));
+        a.step(&Observation::empty(0, t)).without_storage();
         t += 1;
     }
     let term = a.consensus().unwrap().raft().unwrap().term();
@@ -225,7 +226,7 @@ pre_vote = false
         o.inbox[k].src = src;
     }
     o.inbox_len = 2;
-    a.step(&o);
+    a.step(&o).without_storage();
     assert_eq!(
         a.consensus().unwrap().raft().unwrap().role(),
         Role::Candidate
@@ -240,7 +241,7 @@ fn a_knocked_down_robot_runs_no_consensus() {
     o.state = RobotState::Down as u8;
     for t in 0..100 {
         o.tick = t;
-        let cmd = a.step(&o);
+        let cmd = a.step(&o).without_storage();
         assert_eq!(cmd.report_len, 0, "the world would not record its notes");
         assert!(cmd.outbox().is_empty());
     }
@@ -274,7 +275,7 @@ decide_tick = 5
     let mut claims = 0;
     for t in 0..10 {
         o.tick = t;
-        let cmd = a.step(&o);
+        let cmd = a.step(&o).without_storage();
         for f in cmd.outbox() {
             if let Some(RadioMsg::Consensus(ConsensusMsg::QuadLeader { score, leader, .. })) =
                 RadioMsg::decode(f.bytes())
@@ -287,4 +288,47 @@ decide_tick = 5
     assert_eq!(claims, 10, "one claim per tick");
     let q = a.consensus().unwrap().quadrant().unwrap();
     assert_eq!((q.score(), q.leader()), (3, Some(0)));
+}
+
+#[test]
+fn the_changes_a_robot_hands_over_rebuild_its_whole_state_and_a_restored_one_starts_clean() {
+    let cfg = config(
+        r#"
+[consensus]
+[[consensus.propose]]
+tick = 50
+goal = [2.0, 18.0]
+"#,
+    );
+    let mut a = Agent::new(&cfg, 0);
+    let mut stored = Persistent::default();
+    let mut handed = 0;
+    for t in 0..120 {
+        let step = a.step(&obs(t));
+        let change = step.persist().cloned();
+        if t == 0 {
+            // A new robot's state was never written: its first step hands it over.
+            assert!(change.is_some_and(|c| c.hard.is_some()));
+        }
+        let _ = step.persist_then(|c| {
+            stored.apply(&c);
+            handed += 1;
+            Ok::<(), ()>(())
+        });
+        assert_eq!(
+            Some(&stored),
+            a.consensus().unwrap().persistent().as_ref(),
+            "tick {t}"
+        );
+    }
+    assert!(
+        handed > 2 && handed < 120,
+        "only ticks that change the state hand over: {handed}"
+    );
+    assert_eq!(stored.log.last_index(), 2, "the no-op and the decision");
+    let mut b = Agent::restore(&cfg, 0, stored.clone(), 1);
+    assert!(
+        b.step(&obs(0)).persist().is_none(),
+        "nothing changed since the store"
+    );
 }

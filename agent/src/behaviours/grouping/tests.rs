@@ -4,9 +4,9 @@
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
-use swarmrt_agent::behaviours::grouping::equations::*;
-use swarmrt_agent::behaviours::grouping::metrics::delta_omega;
-use swarmrt_agent::consensus::quadrant::{quadrant, score};
+use crate::behaviours::grouping::equations::*;
+use crate::behaviours::grouping::metrics::delta_omega;
+use crate::consensus::quadrant::{quadrant, score};
 use swarmrt_protocol::Neighbour;
 
 fn close(a: V2, b: V2) -> bool {
@@ -138,7 +138,7 @@ fn frn_counts_counter_clockwise_from_the_leader_and_slots_follow_eq_8_9() {
     }
     let three = [V2::new(0.0, 0.0), V2::new(2.0, 0.0), V2::new(1.0, 3.0)];
     assert!(close(
-        swarmrt_agent::behaviours::grouping::equations::cog(&three),
+        crate::behaviours::grouping::equations::cog(&three),
         V2::new(1.0, 1.0)
     ));
 }

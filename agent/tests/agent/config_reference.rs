@@ -1,7 +1,7 @@
 //! `docs/config.md` is exactly what `swarmrt_scenario::reference` renders from the key tables
 //! and the serde schemas, and the tables hold exactly the keys the schemas accept: a key added,
 //! removed or re-bounded without regenerating the reference fails here.
-//! `SWARMRT_UPDATE_DOCS=1 cargo test -p swarmrt-agent --test config_reference` rewrites it.
+//! `SWARMRT_UPDATE_DOCS=1 cargo test -p swarmrt-agent --test agent config_reference` rewrites it.
 
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -10,7 +10,7 @@ use swarmrt_agent::registry::BEHAVIOURS;
 use swarmrt_scenario::reference::{self, BehaviourDoc, Default, Schema};
 
 const REGENERATE: &str =
-    "SWARMRT_UPDATE_DOCS=1 cargo test -p swarmrt-agent --test config_reference";
+    "SWARMRT_UPDATE_DOCS=1 cargo test -p swarmrt-agent --test agent config_reference";
 
 fn behaviours() -> Vec<BehaviourDoc> {
     BEHAVIOURS

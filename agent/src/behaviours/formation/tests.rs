@@ -1,8 +1,8 @@
 //! The formation's rules (seed 000) as tables: observer selection from the cases of the
 //! paper's Fig. 5 and Fig. 6, section 5.2's turn table, and epsilon-greedy's flip rates.
 
-use swarmrt_agent::behaviours::formation::direction::{self, Dir, Seen};
-use swarmrt_agent::behaviours::formation::observers::{self, Observers, Placed, to_leader_frame};
+use crate::behaviours::formation::direction::{self, Dir, Seen};
+use crate::behaviours::formation::observers::{self, Observers, Placed, to_leader_frame};
 use swarmrt_scenario::rng;
 
 /// Half a robot width: differences below it count as equal.
@@ -194,7 +194,7 @@ fn the_turn_table_of_section_5_2() {
 
 #[test]
 fn side_ranges_travel_in_whole_decimetres() {
-    use swarmrt_agent::behaviours::formation::{range_from_wire, range_to_wire};
+    use crate::behaviours::formation::{range_from_wire, range_to_wire};
     assert_eq!(range_to_wire(None), 0, "nothing seen");
     assert_eq!(range_from_wire(0), None);
     assert_eq!(range_to_wire(Some(2.94)), 29);

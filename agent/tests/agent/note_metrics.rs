@@ -50,10 +50,7 @@ fn config(name: &str, text: &str) -> Config {
 }
 
 fn metric(cfg: &Config, rec: &Records, key: &str) -> Value {
-    let m = registry::plugin(&cfg.behaviour.kind)
-        .unwrap()
-        .metrics(cfg, rec)
-        .unwrap();
+    let m = registry::configure(cfg).unwrap().metrics(rec);
     m.into_iter().find(|(k, _)| *k == key).unwrap().1
 }
 
@@ -81,7 +78,7 @@ fn recorded_notes_decode_as_consensus_or_the_behaviours_own() {
 fn chain_metrics_read_veto_and_replan_notes() {
     let cfg = config(
         "chain_stationary.toml",
-        include_str!("../../configs/chain_stationary.toml"),
+        include_str!("../../../configs/chain_stationary.toml"),
     );
     let veto = |master, depth, why| Note::Chain(ChainNote::Veto { master, depth, why });
     let rec = records(&[
@@ -103,10 +100,7 @@ fn chain_metrics_read_veto_and_replan_notes() {
     assert_eq!(m["vetoes"], 2, "{m}");
     assert_eq!(m["veto_depth"], 3, "{m}");
     assert_eq!(m["replans"], 1, "{m}");
-    let series = registry::plugin("chain")
-        .unwrap()
-        .series(&cfg, &rec)
-        .unwrap();
+    let series = registry::configure(&cfg).unwrap().series(&rec);
     let vetoes = series.iter().find(|s| s.name == "chain_vetoes").unwrap();
     let rows: Vec<[f64; 3]> = vetoes.rows.iter().map(|r| [r[2], r[3], r[4]]).collect();
     // (robot, depth, event): the re-plan belongs to the first veto, the second opens another.
@@ -125,7 +119,7 @@ fn chain_metrics_read_veto_and_replan_notes() {
 fn formation_counts_epsilon_flip_notes() {
     let cfg = config(
         "formation_simple.toml",
-        include_str!("../../configs/formation_simple.toml"),
+        include_str!("../../../configs/formation_simple.toml"),
     );
     let note = |n| Note::Formation(n);
     let rec = records(&[
@@ -143,7 +137,7 @@ fn formation_counts_epsilon_flip_notes() {
 fn grouping_metrics_read_leader_formed_goal_and_classifier_notes() {
     let cfg = config(
         "grouping_s1.toml",
-        include_str!("../../configs/grouping_s1.toml"),
+        include_str!("../../../configs/grouping_s1.toml"),
     );
     let dt = cfg.scenario.dt;
     let leader = |leader, leads, changes| {
@@ -199,7 +193,7 @@ fn grouping_metrics_read_leader_formed_goal_and_classifier_notes() {
 fn planner_metrics_read_plan_notes_with_costs_as_recorded() {
     let cfg = config(
         "planner_uav3.toml",
-        include_str!("../../configs/planner_uav3.toml"),
+        include_str!("../../../configs/planner_uav3.toml"),
     );
     let planned = |plan, vehicle, cost, expansions| {
         Note::Planner(PlanNote::Planned {

@@ -1,5 +1,5 @@
 //! The viewer overlay of each behaviour (`behaviours/<name>/overlay.rs`) and of the consensus
-//! layer (`consensus/lane.rs`), through the registry's type-erased [`Plugin`] and with every
+//! layer (`overlay/lane.rs`), through the registry's type-erased [`Plugin`] and with every
 //! note rendered exactly as the world records it (postcard report -> `VOCABULARY` -> JSON).
 
 use std::path::Path;
@@ -10,8 +10,8 @@ use swarmrt_agent::behaviours::chain::{ChainNote, VetoWhy};
 use swarmrt_agent::behaviours::formation::FormationNote;
 use swarmrt_agent::behaviours::grouping::GroupNote;
 use swarmrt_agent::behaviours::planner::{HoverWhy, PlanNote};
-use swarmrt_agent::consensus::lane::{self, lane_change};
 use swarmrt_agent::consensus::{ConsensusNote, Role};
+use swarmrt_agent::overlay::lane::{self, lane_change};
 use swarmrt_agent::overlay::{Headline, LaneChange};
 use swarmrt_agent::registry::{self, BEHAVIOURS, Plugin, VOCABULARY};
 use swarmrt_scenario::Config;
@@ -44,6 +44,26 @@ fn role_name(p: &dyn Plugin, role: Option<u8>) -> Option<&'static str> {
 
 fn kind(h: Option<Headline>) -> Option<&'static str> {
     h.map(|h| h.kind)
+}
+
+/// Robot `id`'s role at the start, with `cfg`'s parameters.
+fn initial_role(p: &dyn Plugin, cfg: &Config, id: u32) -> Option<u8> {
+    p.configure(cfg).ok()?.initial_role(id)
+}
+
+/// Robot `id`'s role after the recorded `note`, decoded once as a viewer reads it.
+fn role_after(p: &dyn Plugin, cfg: &Config, id: u32, note: &Value) -> Option<u8> {
+    p.configure(cfg).ok()?.role_after(id, &p.read_note(note)?)
+}
+
+/// The recorded `note` as a headline.
+fn headline(p: &dyn Plugin, note: &Value) -> Option<Headline> {
+    p.headline(&p.read_note(note)?)
+}
+
+/// The lane change of the recorded `note`.
+fn lane_of(p: &dyn Plugin, note: &Value) -> Option<LaneChange> {
+    p.lane(&p.read_note(note)?)
 }
 
 #[test]
@@ -101,7 +121,7 @@ fn every_role_has_a_name_and_a_distinct_css_colour() {
 fn chain_roles_follow_the_structure_and_vetoes() {
     let cfg = config("chain_stationary.toml", &[]);
     let p = plugin(&cfg);
-    let initial = |id| role_name(p, p.initial_role(&cfg, id));
+    let initial = |id| role_name(p, initial_role(p, &cfg, id));
     // Robot 0 is the head (the initiator by default), 6 is stationary, 11 ends the chain.
     assert_eq!(initial(0), Some("initiator"));
     assert_eq!(initial(1), Some("master"));
@@ -109,18 +129,18 @@ fn chain_roles_follow_the_structure_and_vetoes() {
     assert_eq!(initial(11), Some("end slave"));
     // A middle initiator has two sub-chains: both ends are end slaves, its neighbours masters.
     let mid = config("chain_stationary.toml", &["behaviour.initiator=5"]);
-    assert_eq!(role_name(p, p.initial_role(&mid, 5)), Some("initiator"));
-    assert_eq!(role_name(p, p.initial_role(&mid, 4)), Some("master"));
-    assert_eq!(role_name(p, p.initial_role(&mid, 0)), Some("end slave"));
-    assert_eq!(role_name(p, p.initial_role(&mid, 11)), Some("end slave"));
+    assert_eq!(role_name(p, initial_role(p, &mid, 5)), Some("initiator"));
+    assert_eq!(role_name(p, initial_role(p, &mid, 4)), Some("master"));
+    assert_eq!(role_name(p, initial_role(p, &mid, 0)), Some("end slave"));
+    assert_eq!(role_name(p, initial_role(p, &mid, 11)), Some("end slave"));
 
     let veto = recorded(Note::Chain(ChainNote::Veto {
         master: 5,
         depth: 1,
         why: VetoWhy::Stationary,
     }));
-    assert_eq!(role_name(p, p.role_after(&cfg, 6, &veto)), Some("vetoing"));
-    let h = p.headline(&veto).unwrap();
+    assert_eq!(role_name(p, role_after(p, &cfg, 6, &veto)), Some("vetoing"));
+    let h = headline(p, &veto).unwrap();
     assert_eq!(h.kind, "veto");
     assert_eq!(h.others, vec![5], "the master it vetoes");
     assert!(
@@ -134,10 +154,10 @@ fn chain_roles_follow_the_structure_and_vetoes() {
         turn_deg: -45.0,
     }));
     assert_eq!(
-        role_name(p, p.role_after(&cfg, 0, &replan)),
+        role_name(p, role_after(p, &cfg, 0, &replan)),
         Some("initiator")
     );
-    let h = p.headline(&replan).unwrap();
+    let h = headline(p, &replan).unwrap();
     assert_eq!(h.kind, "replan");
     assert!(
         h.text.contains("6 robot") && h.text.contains("right"),
@@ -146,17 +166,18 @@ fn chain_roles_follow_the_structure_and_vetoes() {
     );
     // Not a chain note: no role, no headline.
     let other = recorded(Note::Formation(FormationNote::EpsilonFlip));
-    assert_eq!(p.role_after(&cfg, 0, &other), None);
-    assert_eq!(p.headline(&other), None);
+    assert_eq!(role_after(p, &cfg, 0, &other), None);
+    assert_eq!(headline(p, &other), None);
 }
 
 #[test]
 fn formation_roles_are_the_observers_and_turns_are_headlines() {
     let cfg = config("formation_deadlock.toml", &[]);
     let p = plugin(&cfg);
-    assert_eq!(role_name(p, p.initial_role(&cfg, 3)), Some("lidar off"));
+    assert_eq!(role_name(p, initial_role(p, &cfg, 3)), Some("lidar off"));
     let role = |r| {
-        p.role_after(
+        role_after(
+            p,
             &cfg,
             0,
             &recorded(Note::Formation(FormationNote::Role { role: r })),
@@ -173,17 +194,22 @@ fn formation_roles_are_the_observers_and_turns_are_headlines() {
     );
 
     let flip = recorded(Note::Formation(FormationNote::EpsilonFlip));
-    assert_eq!(p.role_after(&cfg, 0, &flip), None);
-    assert_eq!(kind(p.headline(&flip)), Some("epsilon_flip"));
-    let turn = p
-        .headline(&recorded(Note::Formation(FormationNote::Turn { dir: 1 })))
-        .unwrap();
+    assert_eq!(role_after(p, &cfg, 0, &flip), None);
+    assert_eq!(kind(headline(p, &flip)), Some("epsilon_flip"));
+    let turn = headline(
+        p,
+        &recorded(Note::Formation(FormationNote::Turn { dir: 1 })),
+    )
+    .unwrap();
     assert_eq!(
         (turn.kind, turn.text.as_str()),
         ("turn", "turns the swarm left")
     );
     assert_eq!(
-        p.headline(&recorded(Note::Formation(FormationNote::Role { role: 1 }))),
+        headline(
+            p,
+            &recorded(Note::Formation(FormationNote::Role { role: 1 }))
+        ),
         None
     );
 }
@@ -195,15 +221,15 @@ fn flocks_are_the_start_groups() {
     let groups = cfg.start_group_count();
     assert!(groups >= 2, "a config with two flocks");
     let last = cfg.robots.count - 1;
-    assert_eq!(role_name(p, p.initial_role(&cfg, 0)), Some("flock 0"));
+    assert_eq!(role_name(p, initial_role(p, &cfg, 0)), Some("flock 0"));
     let want = format!("flock {}", groups - 1);
     assert_eq!(
-        role_name(p, p.initial_role(&cfg, last)),
+        role_name(p, initial_role(p, &cfg, last)),
         Some(want.as_str())
     );
     for id in 0..cfg.robots.count {
         assert_eq!(
-            p.initial_role(&cfg, id),
+            initial_role(p, &cfg, id),
             Some(cfg.start_group(id) as u8),
             "robot {id}"
         );
@@ -216,17 +242,17 @@ fn flocks_are_the_start_groups() {
             cfg.robots.count - 1
         )],
     );
-    assert_eq!(role_name(p, p.initial_role(&sized, 0)), Some("flock 0"));
-    assert_eq!(role_name(p, p.initial_role(&sized, 1)), Some("flock 1"));
+    assert_eq!(role_name(p, initial_role(p, &sized, 0)), Some("flock 0"));
+    assert_eq!(role_name(p, initial_role(p, &sized, 1)), Some("flock 1"));
 }
 
 #[test]
 fn grouping_roles_lanes_and_headlines() {
     let cfg = config("grouping_s1.toml", &[]);
     let p = plugin(&cfg);
-    assert_eq!(role_name(p, p.initial_role(&cfg, 2)), Some("alone"));
+    assert_eq!(role_name(p, initial_role(p, &cfg, 2)), Some("alone"));
     let g = |n| recorded(Note::Grouping(n));
-    let after = |n| role_name(p, p.role_after(&cfg, 2, &g(n)));
+    let after = |n| role_name(p, role_after(p, &cfg, 2, &g(n)));
     assert_eq!(after(GroupNote::Clustered), Some("clustered"));
     let leads = GroupNote::Leader {
         leader: 2,
@@ -248,7 +274,7 @@ fn grouping_roles_lanes_and_headlines() {
     assert_eq!(after(GroupNote::Formed { n: 5 }), None);
 
     // The group is the leader followed, the same lane as a consensus quadrant note's.
-    let lane_follows = p.lane(&g(follows.clone())).unwrap();
+    let lane_follows = lane_of(p, &g(follows.clone())).unwrap();
     assert_eq!(lane_follows.leader, Some(7));
     assert_eq!(lane_follows.role, Some("follower"));
     let quad = recorded(Note::Consensus(ConsensusNote::Quadrant {
@@ -256,24 +282,30 @@ fn grouping_roles_lanes_and_headlines() {
         leads: false,
         score: 1,
     }));
-    assert_eq!(p.lane(&quad), Some(lane_follows));
-    assert_eq!(p.lane(&g(leads.clone())).unwrap().role, Some("leader"));
+    assert_eq!(lane_of(p, &quad), Some(lane_follows));
+    assert_eq!(lane_of(p, &g(leads.clone())).unwrap().role, Some("leader"));
 
-    assert_eq!(kind(p.headline(&g(leads))), Some("leader"));
-    assert_eq!(p.headline(&g(follows)), None);
-    assert_eq!(kind(p.headline(&g(GroupNote::GoalSeen))), Some("goal_seen"));
-    assert_eq!(kind(p.headline(&g(GroupNote::GoalTold))), Some("goal_told"));
-    assert_eq!(kind(p.headline(&g(GroupNote::Arrived))), Some("arrived"));
-    assert_eq!(p.headline(&g(GroupNote::Clustered)), None);
+    assert_eq!(kind(headline(p, &g(leads))), Some("leader"));
+    assert_eq!(headline(p, &g(follows)), None);
+    assert_eq!(
+        kind(headline(p, &g(GroupNote::GoalSeen))),
+        Some("goal_seen")
+    );
+    assert_eq!(
+        kind(headline(p, &g(GroupNote::GoalTold))),
+        Some("goal_told")
+    );
+    assert_eq!(kind(headline(p, &g(GroupNote::Arrived))), Some("arrived"));
+    assert_eq!(headline(p, &g(GroupNote::Clustered)), None);
 }
 
 #[test]
 fn planner_vehicles_hover_fly_and_arrive() {
     let cfg = config("planner_uav3.toml", &[]);
     let p = plugin(&cfg);
-    assert_eq!(role_name(p, p.initial_role(&cfg, 1)), Some("hovering"));
+    assert_eq!(role_name(p, initial_role(p, &cfg, 1)), Some("hovering"));
     let n = |n| recorded(Note::Planner(n));
-    let after = |id, note| role_name(p, p.role_after(&cfg, id, &n(note)));
+    let after = |id, note| role_name(p, role_after(p, &cfg, id, &n(note)));
     let plan = 2 << 12 | 1; // plan 1 of term 2
     assert_eq!(after(1, PlanNote::Flying { plan }), Some("in flight"));
     let hover = PlanNote::Hover {
@@ -294,7 +326,7 @@ fn planner_vehicles_hover_fly_and_arrive() {
         "the leader is vehicle 2"
     );
 
-    let h = p.headline(&n(no_route)).unwrap();
+    let h = headline(p, &n(no_route)).unwrap();
     assert_eq!((h.kind, h.others.clone()), ("no_route", vec![2]));
     assert!(h.text.contains("plan 1 of term 2"), "{}", h.text);
     let planned = PlanNote::Planned {
@@ -306,13 +338,13 @@ fn planner_vehicles_hover_fly_and_arrive() {
         expansions: 99,
     };
     assert_eq!(after(0, planned), None);
-    let h = p.headline(&n(planned)).unwrap();
+    let h = headline(p, &n(planned)).unwrap();
     assert_eq!((h.kind, h.others.clone()), ("replan", vec![1]));
-    let h = p.headline(&n(hover)).unwrap();
+    let h = headline(p, &n(hover)).unwrap();
     assert_eq!(h.kind, "hover");
     assert!(h.text.contains("silent"), "{}", h.text);
-    assert_eq!(kind(p.headline(&n(PlanNote::Arrived))), Some("arrived"));
-    assert_eq!(p.headline(&n(PlanNote::Flying { plan })), None);
+    assert_eq!(kind(headline(p, &n(PlanNote::Arrived))), Some("arrived"));
+    assert_eq!(headline(p, &n(PlanNote::Flying { plan })), None);
 }
 
 #[test]
@@ -320,7 +352,7 @@ fn goto_has_no_overlay() {
     let cfg = config("goto_simple.toml", &[]);
     let p = plugin(&cfg);
     assert!(p.roles().is_empty());
-    assert_eq!(p.initial_role(&cfg, 0), None);
+    assert_eq!(initial_role(p, &cfg, 0), None);
 }
 
 #[test]
@@ -340,11 +372,15 @@ fn consensus_state_boot_and_commit_change_the_lane() {
     let json = recorded(Note::Consensus(leader.clone()));
     assert_eq!(lane::from_json(&json), Some(leader));
     let cfg = config("raft_election.toml", &[]);
-    for p in BEHAVIOURS {
-        assert_eq!(p.lane(&json), Some(want), "{}", p.kind());
-        let h = p.headline(&json).unwrap();
+    for &p in BEHAVIOURS {
+        assert_eq!(lane_of(p, &json), Some(want), "{}", p.kind());
+        let h = headline(p, &json).unwrap();
         assert_eq!((h.kind, h.text.as_str()), ("elected", "leader of term 3"));
-        assert_eq!(p.role_after(&cfg, 0, &json), None, "not a behaviour's note");
+        assert_eq!(
+            role_after(p, &cfg, 0, &json),
+            None,
+            "not a behaviour's note"
+        );
     }
     let pre = ConsensusNote::State {
         term: 4,
@@ -415,8 +451,9 @@ fn replay(
 ) {
     let cfg = config(config_name, &[]);
     let p = plugin(&cfg);
+    let configured = p.configure(&cfg).unwrap();
     let mut roles: Vec<Option<u8>> = (0..cfg.robots.count)
-        .map(|id| p.initial_role(&cfg, id))
+        .map(|id| configured.initial_role(id))
         .collect();
     let (mut changes, mut headlines) = (Vec::new(), Vec::new());
     for line in events.lines() {
@@ -428,13 +465,17 @@ fn replay(
             e["tick"].as_u64().unwrap(),
             e["robot"].as_u64().unwrap() as u32,
         );
-        if let Some(r) = p.role_after(&cfg, robot, &e["note"])
+        // Decoded once, as a viewer reads it.
+        let Some(note) = p.read_note(&e["note"]) else {
+            continue;
+        };
+        if let Some(r) = configured.role_after(robot, &note)
             && roles[robot as usize] != Some(r)
         {
             roles[robot as usize] = Some(r);
             changes.push((tick, robot, p.roles()[r as usize].name));
         }
-        if let Some(h) = p.headline(&e["note"]) {
+        if let Some(h) = p.headline(&note) {
             headlines.push((tick, robot, h.kind, h.others));
         }
     }
@@ -443,7 +484,7 @@ fn replay(
 
 #[test]
 fn a_recorded_chain_run_shows_the_veto_travelling_back_and_the_head_replanning() {
-    let events = include_str!("data/chain_stationary.events.jsonl");
+    let events = include_str!("../data/chain_stationary.events.jsonl");
     let (changes, headlines) = replay("chain_stationary.toml", events);
     // Robot 6 (stationary) objects first, then 5 .. 1 pass the veto on towards the head.
     let vetoing: Vec<u32> = changes
@@ -463,7 +504,7 @@ fn a_recorded_chain_run_shows_the_veto_travelling_back_and_the_head_replanning()
 
 #[test]
 fn a_recorded_formation_run_picks_observers_and_flips() {
-    let events = include_str!("data/formation_deadlock.events.jsonl");
+    let events = include_str!("../data/formation_deadlock.events.jsonl");
     let (changes, headlines) = replay("formation_deadlock.toml", events);
     assert!(
         changes.iter().any(|c| c.2 == "front observer (leads)"),

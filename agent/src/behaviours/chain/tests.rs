@@ -2,12 +2,12 @@
 //! the connector angle, Table 2 row by row, and a veto from a fixed slave reversing the
 //! propagation (Fig. 3), observation in, command and frames out.
 
-use swarmrt_agent::behaviour::{Act, Behaviour};
-use swarmrt_agent::behaviours::chain::{
+use crate::behaviour::{Act, Behaviour};
+use crate::behaviours::chain::{
     Chain, ChainNote, ChainParams, Layer, Link, Reaction, Sides, Target, Wheels, adapt,
     clamp_angle, connector_angle, line_blocked, rotate_towards, segment_collision, shake, subsume,
 };
-use swarmrt_agent::inbox::Heard;
+use crate::inbox::Heard;
 use swarmrt_protocol::{Neighbour, Observation};
 use swarmrt_scenario::Config;
 
@@ -209,7 +209,7 @@ fn table_2_row_by_row() {
 
 /// Four robots in a row along +x, 0.45 m apart from x = 3 down to x = 1.65; robot 2 fixed.
 fn config() -> Config {
-    swarmrt_agent::registry::from_toml_str(
+    crate::registry::from_toml_str(
         "chain.toml",
         r#"
 [scenario]

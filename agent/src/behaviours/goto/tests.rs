@@ -1,8 +1,8 @@
 //! The go-to behaviour and the agent core, observation in, command out.
 
-use swarmrt_agent::Agent;
-use swarmrt_agent::RadioMsg;
-use swarmrt_agent::behaviours::goto::Beacon;
+use crate::Agent;
+use crate::RadioMsg;
+use crate::behaviours::goto::Beacon;
 use swarmrt_protocol::{Frame, MAX_PAYLOAD, Observation, RobotState};
 use swarmrt_scenario::Config;
 
@@ -38,11 +38,13 @@ fn obs_at(x: f64, y: f64, theta: f64, tick: u64) -> Observation {
 #[test]
 fn drives_toward_its_slot_and_stops_there() {
     let mut a = Agent::new(&config(), 0);
-    let c = a.step(&obs_at(2.0, 2.0, 0.0, 1));
+    let c = a.step(&obs_at(2.0, 2.0, 0.0, 1)).without_storage();
     assert!(c.v > 0.0 && c.omega.abs() < 1e-9, "straight ahead: {c:?}");
-    let c = a.step(&obs_at(2.0, 2.0, std::f64::consts::PI / 2.0, 2));
+    let c = a
+        .step(&obs_at(2.0, 2.0, std::f64::consts::PI / 2.0, 2))
+        .without_storage();
     assert!(c.omega < 0.0, "goal is to the right: {c:?}");
-    let c = a.step(&obs_at(8.0, 2.0, 0.0, 3));
+    let c = a.step(&obs_at(8.0, 2.0, 0.0, 3)).without_storage();
     assert_eq!((c.v, c.omega), (0.0, 0.0), "at the slot");
 }
 
@@ -52,7 +54,7 @@ fn turns_away_from_an_obstacle_toward_the_open_side() {
     let mut o = obs_at(2.0, 2.0, 0.0, 1);
     // Rays at -90, -45, 0, 45, 90 degrees: something close ahead and on the right.
     o.lidar[..5].copy_from_slice(&[0.5, 0.4, 0.4, 3.0, 3.0]);
-    let c = a.step(&o);
+    let c = a.step(&o).without_storage();
     assert!(c.omega > 0.0, "turns left, the open side: {c:?}");
     assert!(c.v < 0.5, "slows down: {c:?}");
 }
@@ -61,7 +63,12 @@ fn turns_away_from_an_obstacle_toward_the_open_side() {
 fn beacons_every_period_and_stays_silent_otherwise() {
     let mut a = Agent::new(&config(), 0);
     let sent: Vec<u64> = (0..12)
-        .filter(|&t| a.step(&obs_at(2.0, 2.0, 0.0, t)).outbox_len > 0)
+        .filter(|&t| {
+            a.step(&obs_at(2.0, 2.0, 0.0, t))
+                .without_storage()
+                .outbox_len
+                > 0
+        })
         .collect();
     assert_eq!(sent, vec![0, 4, 8]);
 }
@@ -89,7 +96,7 @@ fn a_down_robot_stands_still_and_malformed_frames_are_counted_by_robots_that_lis
     frames(&mut o);
     // Goto steers by its lidar alone: it never reads its inbox, so nothing is decoded.
     let mut a = Agent::new(&config(), 0);
-    let c = a.step(&o);
+    let c = a.step(&o).without_storage();
     assert_eq!((c.v, c.omega, c.outbox_len), (0.0, 0.0, 0));
     assert_eq!(a.malformed(), 0, "goto decodes nothing");
     // The same frames to a behaviour that listens (flocking), and to goto with consensus.
@@ -98,7 +105,7 @@ fn a_down_robot_stands_still_and_malformed_frames_are_counted_by_robots_that_lis
         with_consensus(),
     ] {
         let mut a = Agent::new(&cfg, 0);
-        let c = a.step(&o);
+        let c = a.step(&o).without_storage();
         assert_eq!((c.v, c.omega, c.outbox_len), (0.0, 0.0, 0));
         assert_eq!(
             a.malformed(),

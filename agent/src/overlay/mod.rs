@@ -9,6 +9,8 @@
 //! so a viewer needs no behaviour's types. Everything here is read after the run from the
 //! records: nothing of it runs in a robot, and no record changes because of it.
 
+pub mod lane;
+
 use serde::Serialize;
 use swarmrt_scenario::Config;
 
@@ -38,7 +40,7 @@ pub trait Overlay: Behaviour {
 
     /// How `note` changes the reporter's consensus lane, for a behaviour that runs a
     /// consensus core itself (grouping's quadrant leader choice); the consensus layer's own
-    /// notes are [`crate::consensus::lane`]'s.
+    /// notes are [`lane`]'s.
     fn lane(_note: &Self::Note) -> Option<LaneChange> {
         None
     }

@@ -1,4 +1,4 @@
-//! The consensus layer's part of a viewer's overlay ([`crate::overlay`]): how a robot's
+//! The consensus layer's part of a viewer's overlay: how a robot's
 //! consensus lane (Raft role, term, commit; or the quadrant leader it follows) changes with
 //! each of its notes, and which notes are headlines (an election won, a group leader
 //! declared). Pure functions of one note, read after the run.
@@ -6,8 +6,8 @@
 use serde::Deserialize;
 use serde_json::Value;
 
-use super::notes::{ConsensusNote, Role};
-use crate::overlay::{Headline, LaneChange};
+use super::{Headline, LaneChange};
+use crate::consensus::{ConsensusNote, Role};
 
 /// The name of a Raft role in lanes: `follower`, `pre_candidate`, `candidate`, `leader` (as
 /// the role is spelled in `events.jsonl`).

@@ -1,9 +1,9 @@
 //! The planner behaviour's wire: a route travels in parts that each fit one AppendEntries
 //! frame and one report, and the parts rebuild the route exactly.
 
-use swarmrt_agent::behaviours::planner::split;
-use swarmrt_agent::consensus::raft::fits_frame;
-use swarmrt_agent::consensus::{
+use crate::behaviours::planner::split;
+use crate::consensus::raft::fits_frame;
+use crate::consensus::{
     ConsensusMsg, ConsensusNote, Decision, Entry, Item, NOTE_BUDGET, Notes, ROUTE_PART_MOVES,
     RoutePart, UNSCHEDULED,
 };

@@ -4,13 +4,13 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use proptest::prelude::*;
-use swarmrt_agent::behaviour::{Act, Behaviour};
-use swarmrt_agent::behaviours::flocking::equations::*;
-use swarmrt_agent::behaviours::flocking::{
+use crate::behaviour::{Act, Behaviour};
+use crate::behaviours::flocking::equations::*;
+use crate::behaviours::flocking::{
     FlockMsg, Flocking, FlockingParams, decode_byte, encode_byte, flock_ticks,
 };
-use swarmrt_agent::inbox::Heard;
-use swarmrt_agent::registry;
+use crate::inbox::Heard;
+use crate::registry;
 use swarmrt_protocol::records::Records;
 use swarmrt_protocol::{Neighbour, Observation};
 use swarmrt_scenario::Config;
@@ -336,10 +336,9 @@ fn eq14_22_metrics_on_a_known_run() {
     let t = flock_ticks(&cfg, &p, &two_robot_records(FRAC_PI_2))[0][0];
     assert!(close(t.order, 0.5f64.sqrt(), EPS), "{}", t.order);
 
-    let m = registry::plugin("flocking")
+    let m = registry::configure(&cfg)
         .unwrap()
-        .metrics(&cfg, &two_robot_records(0.0))
-        .unwrap();
+        .metrics(&two_robot_records(0.0));
     let f = &m.iter().find(|(k, _)| *k == "flocking").unwrap().1;
     let fitness = 0.9 * (0.6 + 0.4 / 1.1) + 0.1 * 0.0064;
     assert!(close(f["fitness"].as_f64().unwrap(), fitness, 1e-9), "{f}");

@@ -1,7 +1,7 @@
 //! The envelopes' wire tags (issue 31): each variant's first byte is the tag its registry line
 //! declares, and never moves; the Python and C constants are exactly what
 //! `swarmrt_agent::wire` generates from the registry.
-//! `SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test wire_tags` rewrites them.
+//! `SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test agent wire_tags` rewrites them.
 
 use std::path::PathBuf;
 
@@ -157,7 +157,7 @@ fn check(rel: &str, want: String) {
     assert!(
         have == want,
         "{rel} is not what swarmrt_agent::wire generates from the registry; regenerate it: \
-         SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test wire_tags"
+         SWARMRT_UPDATE_BINDINGS=1 cargo test -p swarmrt-agent --test agent wire_tags"
     );
 }
 
