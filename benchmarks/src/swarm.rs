@@ -753,7 +753,6 @@ fn in_process(cfg: &Config, interrupt: &Interrupt) -> anyhow::Result<InProcessRo
         let t0 = Instant::now();
         run.observe();
         let t1 = Instant::now();
-        run.think();
         run.propagate();
         let t2 = Instant::now();
         run.advance();

@@ -1,12 +1,16 @@
-//! The one in-process lock-step loop: the world core and every robot's core, called in the
-//! order the process shells call them, so both modes write byte-identical records.
+//! The in-process lock-step: the world core and every robot's core in this process, driven by
+//! the one lock-step tick the world process drives too ([`swarmrt_world::lockstep::tick`]),
+//! with [`InProcess`] as its robots, so both modes write byte-identical records.
+
+use std::convert::Infallible;
 
 use swarmrt_agent::Agent;
 use swarmrt_agent::Step;
 use swarmrt_agent::consensus::raft::{MutantScope, Persistent};
 use swarmrt_protocol::control::ProcessFault;
-use swarmrt_protocol::{Command, Observation, RobotState};
+use swarmrt_protocol::{Command, Observation, RobotState, RoundInbox};
 use swarmrt_scenario::Config;
+use swarmrt_world::lockstep::{self, Robots};
 use swarmrt_world::map::MapError;
 use swarmrt_world::world::{PARALLEL_OBSERVE_MIN, worker_threads};
 use swarmrt_world::{Event, ProcessSignal, World};
@@ -36,25 +40,98 @@ fn answer(
 fn store_then_send(step: Step, stored: &mut Option<Persistent>) -> Command {
     let Ok(cmd) = step.persist_then(|change| {
         stored.get_or_insert_default().apply(&change);
-        Ok::<(), std::convert::Infallible>(())
+        Ok::<(), Infallible>(())
     });
     cmd
 }
 
-/// A world and its robots, stepped tick by tick.
-pub struct Lockstep {
+/// The robots of an in-process run: every robot's core, answering in this process.
+pub struct InProcess {
     cfg: Config,
-    world: World,
     agents: Vec<Agent>,
     obs: Vec<Observation>,
-    commands: Vec<Option<Command>>,
     /// Each robot's stable storage (`consensus.storage`): the persistent Raft state its
     /// process would have written before sending this tick's command.
     stored: Vec<Option<Persistent>>,
-    /// Whether the robots answered the last observations already (in [`Lockstep::observe`]).
-    answered: bool,
-    /// Whether [`Lockstep::observe`] fills `obs` ([`Lockstep::keep_observations`]).
+    /// Whether [`Robots::answer`] keeps the observations ([`Lockstep::keep_observations`]).
     keep_observations: bool,
+}
+
+impl Robots for InProcess {
+    type Error = Infallible;
+
+    /// There is no process to signal: a kill or freeze already changed the world's state; a
+    /// restart starts the robot's brain afresh, as a new process would, from its stored
+    /// state if it keeps one.
+    fn carry_out(&mut self, _: &mut World, signals: Vec<ProcessSignal>) -> Result<(), Infallible> {
+        for signal in signals {
+            if let ProcessSignal::Fault(ProcessFault::Restart { robot, incarnation }) = signal {
+                let r = robot as usize;
+                self.agents[r] = match self.stored[r].clone() {
+                    Some(state) => Agent::restore(&self.cfg, robot, state, incarnation),
+                    None => Agent::fresh(&self.cfg, robot, incarnation),
+                };
+            }
+        }
+        Ok(())
+    }
+
+    /// Each robot answers its observation right after the world filled it and on the same
+    /// thread ([`World::observe_each`]), while it is still in cache. A robot's answer reads
+    /// only its own observation and state, so the commands are the same bytes whichever
+    /// thread computed them.
+    fn answer(
+        &mut self,
+        world: &mut World,
+        commands: &mut Vec<Option<Command>>,
+    ) -> Result<(), Infallible> {
+        let n = self.agents.len();
+        commands.clear();
+        commands.resize(n, None);
+        // The Raft mutant selection (tests) is carried onto the observing threads.
+        let mutant = MutantScope::current();
+        let mut robots: Vec<Answering<'_>> = self
+            .agents
+            .iter_mut()
+            .zip(&mut self.stored)
+            .zip(commands.iter_mut())
+            .map(|((agent, stored), command)| (agent, stored, command))
+            .collect();
+        let threads = worker_threads(n, PARALLEL_OBSERVE_MIN);
+        let then = |_: usize, o: &Observation, robot: &mut Answering<'_>| {
+            mutant.enter();
+            let (agent, stored, command) = robot;
+            answer(agent, o, stored, command);
+        };
+        // The propagation rounds read the observations again (reactions); otherwise nothing
+        // does, and each thread fills one of its own robot after robot.
+        if self.keep_observations || world.has_rounds() {
+            world.observe_then(&mut self.obs, &mut robots, threads, then);
+        } else {
+            world.observe_each(&mut robots, threads, then);
+        }
+        Ok(())
+    }
+
+    fn react(
+        &mut self,
+        _: &mut World,
+        round: &[RoundInbox],
+        reactions: &mut [Option<Command>],
+    ) -> Result<(), Infallible> {
+        for inbox in round {
+            let r = inbox.robot as usize;
+            reactions[r] = Some(self.agents[r].react(&self.obs[r], inbox.inbox()));
+        }
+        Ok(())
+    }
+}
+
+/// A world and its robots' cores, stepped tick by tick.
+pub struct Lockstep {
+    world: World,
+    robots: InProcess,
+    commands: Vec<Option<Command>>,
 }
 
 impl Lockstep {
@@ -64,14 +141,15 @@ impl Lockstep {
         let world = World::new(cfg, swarmrt_agent::registry::VOCABULARY)?;
         let n = cfg.robots.count as usize;
         Ok(Lockstep {
-            cfg: cfg.clone(),
             world,
-            agents: (0..n as u32).map(|id| Agent::new(cfg, id)).collect(),
-            obs: vec![Observation::empty(0, 0); n],
+            robots: InProcess {
+                cfg: cfg.clone(),
+                agents: (0..n as u32).map(|id| Agent::new(cfg, id)).collect(),
+                obs: vec![Observation::empty(0, 0); n],
+                stored: vec![None; n],
+                keep_observations: false,
+            },
             commands: Vec::with_capacity(n),
-            stored: vec![None; n],
-            answered: false,
-            keep_observations: false,
         })
     }
 
@@ -87,128 +165,45 @@ impl Lockstep {
 
     /// The robots' cores.
     pub fn agents(&self) -> &[Agent] {
-        &self.agents
+        &self.robots.agents
     }
 
-    /// Every robot's observation of the current tick, as the last [`Lockstep::observe`]
-    /// filled it: only while [`Lockstep::keep_observations`] is on or the scenario has
-    /// propagation rounds (otherwise the observations are not kept, and these are older).
+    /// Every robot's observation of the current tick, as the last tick filled it: only while
+    /// [`Lockstep::keep_observations`] is on or the scenario has propagation rounds
+    /// (otherwise the observations are not kept, and these are older).
     pub fn observations(&self) -> &[Observation] {
-        &self.obs
+        &self.robots.obs
     }
 
     /// Keeps every robot's observation for [`Lockstep::observations`] (off when built: the
     /// robots answer each observation as it is made, and only the propagation rounds read
     /// them again).
     pub fn keep_observations(&mut self, on: bool) {
-        self.keep_observations = on;
+        self.robots.keep_observations = on;
     }
 
-    /// The first phase of a tick: carry out the process faults due (there is no process to
-    /// signal: a kill or freeze already changed the world's state; a restart starts the
-    /// robot's brain afresh, as a new process would, from its stored state if it keeps one),
-    /// then fill every observation.
-    ///
-    /// Each robot also answers its observation here, right after the world filled it and on
-    /// the same thread ([`World::observe_then`]), while it is still in cache; the answers
-    /// wait for [`Lockstep::think`]. A robot's answer reads only its own observation and
-    /// state, which nothing changes between the two phases, so they are the commands
-    /// `think` would compute, the same bytes whichever thread computed them.
+    /// One whole tick ([`lockstep::tick`]): faults, every robot's answer, the propagation
+    /// rounds, the world's step.
+    pub fn step(&mut self) {
+        let Ok(_) = lockstep::tick(&mut self.world, &mut self.robots, &mut self.commands);
+    }
+
+    /// The first phases of [`Lockstep::step`] alone, for a benchmark that times them: the
+    /// faults carried out and every robot's answer ([`Robots::answer`]).
     pub fn observe(&mut self) {
-        for signal in self.world.take_signals() {
-            if let ProcessSignal::Fault(ProcessFault::Restart { robot, incarnation }) = signal {
-                let r = robot as usize;
-                self.agents[r] = match self.stored[r].clone() {
-                    Some(state) => Agent::restore(&self.cfg, robot, state, incarnation),
-                    None => Agent::fresh(&self.cfg, robot, incarnation),
-                };
-            }
-        }
-        let n = self.agents.len();
-        self.commands.clear();
-        self.commands.resize(n, None);
-        // The Raft mutant selection (tests) is carried onto the observing threads.
-        let mutant = MutantScope::current();
-        let mut robots: Vec<Answering<'_>> = self
-            .agents
-            .iter_mut()
-            .zip(&mut self.stored)
-            .zip(&mut self.commands)
-            .map(|((agent, stored), command)| (agent, stored, command))
-            .collect();
-        let threads = worker_threads(n, PARALLEL_OBSERVE_MIN);
-        let then = |_: usize, o: &Observation, robot: &mut Answering<'_>| {
-            mutant.enter();
-            let (agent, stored, command) = robot;
-            answer(agent, o, stored, command);
-        };
-        // The propagation rounds read the observations again (reactions); otherwise nothing
-        // does, and each thread fills one of its own robot after robot.
-        if self.keep_observations || self.world.has_rounds() {
-            self.world
-                .observe_then(&mut self.obs, &mut robots, threads, then);
-        } else {
-            self.world.observe_each(&mut robots, threads, then);
-        }
-        self.answered = true;
+        let signals = self.world.take_signals();
+        let Ok(()) = self.robots.carry_out(&mut self.world, signals);
+        let Ok(()) = self.robots.answer(&mut self.world, &mut self.commands);
     }
 
-    /// The second phase: every robot whose process would run answers its observation (and,
-    /// with storage on, makes its persistent state durable first, as its process does).
-    /// [`Lockstep::observe`] has already had them answer; this computes the answers only when
-    /// it has not (from the observations last kept).
-    pub fn think(&mut self) {
-        if std::mem::take(&mut self.answered) {
-            return;
-        }
-        let n = self.agents.len();
-        self.commands.clear();
-        self.commands.resize(n, None);
-        for (((a, o), stored), cmd) in self
-            .agents
-            .iter_mut()
-            .zip(&self.obs)
-            .zip(&mut self.stored)
-            .zip(&mut self.commands)
-        {
-            answer(a, o, stored, cmd);
-        }
-    }
-
-    /// The third phase (`radio.rounds` > 0 only): the tick's propagation rounds. Each round
-    /// the world routes the frames sent within the tick, and every robot woken with some
-    /// reacts, in ascending id as the world process applies them; a no-op without rounds.
+    /// The propagation rounds of [`Lockstep::step`] alone (a no-op without rounds).
     pub fn propagate(&mut self) {
-        if !self.world.has_rounds() {
-            return;
-        }
-        self.world.start_rounds(&self.commands);
-        loop {
-            let round = self.world.next_round();
-            if round.is_empty() {
-                return;
-            }
-            for inbox in &round {
-                let r = inbox.robot as usize;
-                let answer = self.agents[r].react(&self.obs[r], inbox.inbox());
-                self.world
-                    .react(inbox.robot, Some(&answer), &mut self.commands);
-            }
-        }
+        let Ok(()) = lockstep::propagate(&mut self.world, &mut self.robots, &mut self.commands);
     }
 
-    /// The last phase: the world steps with the answers.
+    /// The last phase of [`Lockstep::step`] alone: the world steps with the answers.
     pub fn advance(&mut self) {
         self.world.step(&self.commands);
-    }
-
-    /// One whole tick: [`Lockstep::observe`], [`Lockstep::think`], [`Lockstep::propagate`],
-    /// [`Lockstep::advance`].
-    pub fn step(&mut self) {
-        self.observe();
-        self.think();
-        self.propagate();
-        self.advance();
     }
 
     /// The events since the last call, in the order they happened.

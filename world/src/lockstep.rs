@@ -76,7 +76,7 @@ pub fn tick<R: Robots>(
 /// The tick's propagation rounds (`radio.rounds` > 0; nothing otherwise): each round the
 /// world routes the frames sent within the tick, the robots woken with some react, and the
 /// world applies their reactions in ascending robot order.
-fn propagate<R: Robots>(
+pub fn propagate<R: Robots>(
     world: &mut World,
     robots: &mut R,
     commands: &mut [Option<Command>],
