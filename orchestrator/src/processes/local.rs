@@ -60,9 +60,10 @@ impl LocalRun {
         let Ok(()) = launch::handle(&mut self.sup, event, &mut self.shell);
     }
 
-    /// Sees every process out: `grace`, then SIGTERM, then SIGKILL. Exits are reaped; with
-    /// `hosts`, host reports are recorded and a Ctrl-C kills everything at once.
-    fn see_out(&mut self, grace: Duration, hosts: bool) {
+    /// Sees every process out: `grace`, then SIGTERM, then SIGKILL. Exits are reaped; at the
+    /// run's `end`, host reports are recorded and a Ctrl-C kills everything at once (before
+    /// robots started, only exits count).
+    fn see_out(&mut self, grace: Duration, end: bool) {
         let times = (grace, EXIT_GRACE);
         launch::see_out(
             &mut self.sup,
@@ -72,8 +73,8 @@ impl LocalRun {
             |shell, m| {
                 match m {
                     Msg::Exited { pid, how } => return Some(Event::Reaped { pid, how }),
-                    Msg::Interrupt if hosts => return Some(Event::KillAll),
-                    Msg::Host(host, HostMsg::Report(report)) if hosts => {
+                    Msg::Interrupt if end => return Some(Event::KillAll),
+                    Msg::Host(host, HostMsg::Report(report)) if end => {
                         shell.host_report(host, report)
                     }
                     _ => {}
