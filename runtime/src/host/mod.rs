@@ -21,7 +21,6 @@ use serde::Serialize;
 use swarmrt_ipc::cleanup;
 use swarmrt_ipc::{self as ipc, IpcError};
 use swarmrt_protocol::control::{HostControl, HostReport, ProcessFault};
-
 use swarmrt_protocol::services::{RunServices, valid_run_id};
 use swarmrt_protocol::{Command, Observation, ObservationHeader, PROTOCOL_VERSION};
 use zenoh::Wait;
