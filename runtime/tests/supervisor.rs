@@ -1,12 +1,15 @@
 //! The robot lifecycle against a fake process table: the [`Supervisor`]'s orders are carried
-//! out by [`FakeOs`], whose processes die, stop and continue as real ones would, and whose
-//! deaths are fed back as reaps. No process is started.
+//! out by [`launch::carry_out`] through [`FakeOs`], whose processes die, stop and continue as
+//! real ones would, and whose deaths are fed back as reaps. No process is started.
 
 use std::collections::BTreeMap;
+use std::convert::Infallible;
 
+use swarmrt_protocol::control::ProcessFault::{self, Freeze, Kill, Restart, Thaw};
 use swarmrt_protocol::{Command, CommandKind, PROTOCOL_VERSION};
 use swarmrt_runtime::supervisor::hello::{Bindings, Sample};
-use swarmrt_runtime::supervisor::{Ended, Order, Pid, Reaped, Signal, Stage, Supervisor};
+use swarmrt_runtime::supervisor::launch::{self, ShellSide};
+use swarmrt_runtime::supervisor::{Ended, Event, Order, Pid, Signal, Stage, Supervisor};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum State {
@@ -25,75 +28,105 @@ struct FakeOs {
     deaf: Vec<Pid>,
     dead: Vec<(Pid, String)>,
     signals: Vec<(Pid, Signal)>,
+    /// What the supervisor handed over: [`Order::Ended`] and [`Order::OtherEnded`].
+    news: Vec<Order>,
+    /// Robots whose processes cannot be started, and the starts that failed.
+    unstartable: Vec<u32>,
+    failed: Vec<(u32, u32)>,
 }
 
-impl FakeOs {
-    fn spawn(&mut self) -> Pid {
+impl ShellSide for FakeOs {
+    type Error = Infallible;
+
+    fn spawn(&mut self, robot: u32, _incarnation: u32) -> std::io::Result<Pid> {
+        if self.unstartable.contains(&robot) {
+            return Err(std::io::Error::other("no such program"));
+        }
         self.next += 1;
         let pid = 100 + self.next;
         self.procs.insert(pid, State::Running);
-        pid
+        Ok(pid)
     }
 
+    fn not_started(
+        &mut self,
+        robot: u32,
+        incarnation: u32,
+        _: std::io::Error,
+    ) -> Result<(), Infallible> {
+        self.failed.push((robot, incarnation));
+        Ok(())
+    }
+
+    fn ended(&mut self, ended: Ended) {
+        self.news.push(Order::Ended(ended));
+    }
+
+    fn other_ended(&mut self, pid: Pid, how: String) {
+        self.news.push(Order::OtherEnded { pid, how });
+    }
+
+    fn signal(&mut self, pids: &[Pid], signal: Signal) {
+        for &pid in pids {
+            self.signals.push((pid, signal));
+            let Some(&state) = self.procs.get(&pid) else {
+                continue;
+            };
+            match (signal, state) {
+                (Signal::Kill, _) => self.exit(pid, "killed by signal 9"),
+                (Signal::Stop, _) => {
+                    self.procs.insert(pid, State::Stopped);
+                }
+                (Signal::Cont, State::StoppedTerm) => self.exit(pid, "killed by signal 15"),
+                (Signal::Cont, _) => {
+                    self.procs.insert(pid, State::Running);
+                }
+                (Signal::Term, _) if self.deaf.contains(&pid) => {}
+                (Signal::Term, State::Running) => self.exit(pid, "killed by signal 15"),
+                (Signal::Term, _) => {
+                    self.procs.insert(pid, State::StoppedTerm);
+                }
+            }
+        }
+    }
+}
+
+impl FakeOs {
     fn exit(&mut self, pid: Pid, how: &str) {
         if self.procs.remove(&pid).is_some() {
             self.dead.push((pid, how.to_string()));
         }
     }
 
-    fn carry_out(&mut self, sup: &mut Supervisor, orders: impl IntoIterator<Item = Order>) {
-        for order in orders {
-            match order {
-                Order::Spawn { robot, incarnation } => {
-                    let pid = self.spawn();
-                    sup.started(robot, incarnation, pid);
-                }
-                Order::Signal { pids, signal } => {
-                    for pid in pids {
-                        self.signals.push((pid, signal));
-                        let Some(&state) = self.procs.get(&pid) else {
-                            continue;
-                        };
-                        match (signal, state) {
-                            (Signal::Kill, _) => self.exit(pid, "killed by signal 9"),
-                            (Signal::Stop, _) => {
-                                self.procs.insert(pid, State::Stopped);
-                            }
-                            (Signal::Cont, State::StoppedTerm) => {
-                                self.exit(pid, "killed by signal 15")
-                            }
-                            (Signal::Cont, _) => {
-                                self.procs.insert(pid, State::Running);
-                            }
-                            (Signal::Term, _) if self.deaf.contains(&pid) => {}
-                            (Signal::Term, State::Running) => self.exit(pid, "killed by signal 15"),
-                            (Signal::Term, _) => {
-                                self.procs.insert(pid, State::StoppedTerm);
-                            }
-                        }
-                    }
-                }
-            }
-        }
+    fn carry_out(&mut self, sup: &mut Supervisor, orders: Vec<Order>) {
+        let Ok(()) = launch::carry_out(sup, orders, self);
     }
 
-    /// Reaps every dead process, as the reaper threads would.
-    fn reap(&mut self, sup: &mut Supervisor) -> Vec<Reaped> {
-        std::mem::take(&mut self.dead)
-            .into_iter()
-            .map(|(pid, how)| sup.reaped(pid, &how))
-            .collect()
+    /// Tells the supervisor `event` and carries out its orders.
+    fn on(&mut self, sup: &mut Supervisor, event: Event) {
+        let Ok(()) = launch::handle(sup, event, self);
+    }
+
+    /// Reaps every dead process, as the reaper threads would; returns what was handed over.
+    fn reap(&mut self, sup: &mut Supervisor) -> Vec<Order> {
+        for (pid, how) in std::mem::take(&mut self.dead) {
+            self.on(sup, Event::Reaped { pid, how });
+        }
+        std::mem::take(&mut self.news)
     }
 }
 
 fn started(n: u32) -> (Supervisor, FakeOs) {
     let mut sup = Supervisor::new();
     let mut os = FakeOs::default();
-    for r in 0..n {
-        let order = sup.spawn(r).expect("running");
-        os.carry_out(&mut sup, [order]);
+    for robot in 0..n {
+        os.on(&mut sup, Event::Launch { robot });
     }
     (sup, os)
+}
+
+fn fault(sup: &mut Supervisor, f: ProcessFault) -> Vec<Order> {
+    sup.on(Event::Fault(f))
 }
 
 #[test]
@@ -101,22 +134,20 @@ fn a_scheduled_kill_is_ordered_and_a_hung_robots_kill_is_a_death() {
     let (mut sup, mut os) = started(3);
     let p0 = sup.pid_of(0).unwrap();
     let p1 = sup.pid_of(1).unwrap();
-    let orders = sup.kill(0);
-    os.carry_out(&mut sup, orders);
-    let orders = sup.kill_hung(1);
-    os.carry_out(&mut sup, orders);
+    os.on(&mut sup, Event::Fault(Kill { robot: 0 }));
+    os.on(&mut sup, Event::Hung { robot: 1 });
     let reaped = os.reap(&mut sup);
     assert_eq!(
         reaped,
         vec![
-            Reaped::Robot(Ended {
+            Order::Ended(Ended {
                 robot: 0,
                 incarnation: 0,
                 pid: p0,
                 how: "killed by signal 9".into(),
                 ordered: true
             }),
-            Reaped::Robot(Ended {
+            Order::Ended(Ended {
                 robot: 1,
                 incarnation: 0,
                 pid: p1,
@@ -127,8 +158,9 @@ fn a_scheduled_kill_is_ordered_and_a_hung_robots_kill_is_a_death() {
     );
     // A dead robot has no process to signal any more.
     assert_eq!(sup.pid_of(0), None);
-    assert_eq!(sup.kill(0), None);
-    assert_eq!(sup.freeze(0), None);
+    assert_eq!(fault(&mut sup, Kill { robot: 0 }), vec![]);
+    assert_eq!(fault(&mut sup, Freeze { robot: 0 }), vec![]);
+    assert_eq!(sup.on(Event::Hung { robot: 1 }), vec![]);
     let ordered: Vec<bool> = sup.processes().iter().map(|p| p.ordered).collect();
     assert_eq!(ordered, [true, false, false]);
 }
@@ -137,7 +169,13 @@ fn a_scheduled_kill_is_ordered_and_a_hung_robots_kill_is_a_death() {
 fn a_restart_kills_the_old_process_on_the_order_and_asks_for_the_next_incarnation() {
     let (mut sup, mut os) = started(2);
     let old = sup.pid_of(1).unwrap();
-    let orders = sup.restart(1, 1);
+    let orders = fault(
+        &mut sup,
+        Restart {
+            robot: 1,
+            incarnation: 1,
+        },
+    );
     assert_eq!(
         orders,
         vec![
@@ -156,14 +194,14 @@ fn a_restart_kills_the_old_process_on_the_order_and_asks_for_the_next_incarnatio
     let fresh = sup.pid_of(1).unwrap();
     assert_ne!(fresh, old);
     let reaped = os.reap(&mut sup);
-    assert!(matches!(&reaped[..], [Reaped::Robot(e)] if e.pid == old && e.ordered));
+    assert!(matches!(&reaped[..], [Order::Ended(e)] if e.pid == old && e.ordered));
     // A later kill reaches the fresh process, not the old one.
     assert_eq!(
-        sup.kill(1),
-        Some(Order::Signal {
+        fault(&mut sup, Kill { robot: 1 }),
+        vec![Order::Signal {
             pids: vec![fresh],
             signal: Signal::Kill
-        })
+        }]
     );
     let history: Vec<(u32, u32, bool)> = sup
         .processes()
@@ -176,11 +214,16 @@ fn a_restart_kills_the_old_process_on_the_order_and_asks_for_the_next_incarnatio
 #[test]
 fn a_restart_of_a_robot_without_a_process_only_spawns() {
     let (mut sup, mut os) = started(1);
-    let orders = sup.kill(0);
-    os.carry_out(&mut sup, orders);
+    os.on(&mut sup, Event::Fault(Kill { robot: 0 }));
     os.reap(&mut sup);
     assert_eq!(
-        sup.restart(0, 1),
+        fault(
+            &mut sup,
+            Restart {
+                robot: 0,
+                incarnation: 1
+            }
+        ),
         vec![Order::Spawn {
             robot: 0,
             incarnation: 1
@@ -189,18 +232,35 @@ fn a_restart_of_a_robot_without_a_process_only_spawns() {
 }
 
 #[test]
+fn a_failed_start_is_the_shells_and_leaves_no_process_behind() {
+    let (mut sup, mut os) = started(1);
+    os.unstartable.push(0);
+    let old = sup.pid_of(0).unwrap();
+    os.on(
+        &mut sup,
+        Event::Fault(Restart {
+            robot: 0,
+            incarnation: 1,
+        }),
+    );
+    // The old process was still killed on the order; the fresh one never ran.
+    assert_eq!(os.failed, [(0, 1)]);
+    assert_eq!(sup.pid_of(0), None);
+    assert!(matches!(&os.reap(&mut sup)[..], [Order::Ended(e)] if e.pid == old && e.ordered));
+    assert!(sup.is_empty());
+    assert_eq!(sup.processes().len(), 1);
+}
+
+#[test]
 fn a_frozen_robot_is_continued_before_shutdown_and_a_thawed_one_is_not() {
     let (mut sup, mut os) = started(3);
     let (p0, p1) = (sup.pid_of(0).unwrap(), sup.pid_of(1).unwrap());
-    let orders = sup.freeze(0);
-    os.carry_out(&mut sup, orders);
-    let orders = sup.freeze(1);
-    os.carry_out(&mut sup, orders);
-    let orders = sup.thaw(1);
-    os.carry_out(&mut sup, orders);
+    os.on(&mut sup, Event::Fault(Freeze { robot: 0 }));
+    os.on(&mut sup, Event::Fault(Freeze { robot: 1 }));
+    os.on(&mut sup, Event::Fault(Thaw { robot: 1 }));
     assert_eq!(os.procs[&p0], State::Stopped);
     assert_eq!(os.procs[&p1], State::Running);
-    let orders = sup.shut_down();
+    let orders = sup.on(Event::ShutDown);
     assert_eq!(
         orders,
         vec![Order::Signal {
@@ -211,17 +271,15 @@ fn a_frozen_robot_is_continued_before_shutdown_and_a_thawed_one_is_not() {
     os.carry_out(&mut sup, orders);
     assert!(os.procs.values().all(|s| *s == State::Running));
     // Nothing is left frozen: a second shutdown continues nobody.
-    assert!(sup.shut_down().is_empty());
+    assert!(sup.on(Event::ShutDown).is_empty());
 }
 
 #[test]
 fn a_frozen_robot_that_is_killed_is_not_continued() {
     let (mut sup, mut os) = started(1);
-    let orders = sup.freeze(0);
-    os.carry_out(&mut sup, orders);
-    let orders = sup.kill(0);
-    os.carry_out(&mut sup, orders);
-    assert!(sup.shut_down().is_empty());
+    os.on(&mut sup, Event::Fault(Freeze { robot: 0 }));
+    os.on(&mut sup, Event::Fault(Kill { robot: 0 }));
+    assert!(sup.on(Event::ShutDown).is_empty());
     assert_eq!(os.reap(&mut sup).len(), 1);
     assert!(sup.is_empty());
 }
@@ -229,7 +287,8 @@ fn a_frozen_robot_that_is_killed_is_not_continued() {
 #[test]
 fn shutdown_escalates_from_sigterm_to_sigkill_then_gives_up() {
     let (mut sup, mut os) = started(3);
-    sup.watch(42); // the world, say: seen out with the robots, untouched by faults
+    // The world, say: seen out with the robots, untouched by faults.
+    os.on(&mut sup, Event::Watch { pid: 42 });
     os.procs.insert(42, State::Running);
     let (p0, p1, p2) = (
         sup.pid_of(0).unwrap(),
@@ -237,16 +296,14 @@ fn shutdown_escalates_from_sigterm_to_sigkill_then_gives_up() {
         sup.pid_of(2).unwrap(),
     );
     os.deaf.push(p2);
-    let orders = sup.freeze(1);
-    os.carry_out(&mut sup, orders);
-    let orders = sup.shut_down();
-    os.carry_out(&mut sup, orders);
+    os.on(&mut sup, Event::Fault(Freeze { robot: 1 }));
+    os.on(&mut sup, Event::ShutDown);
     assert_eq!(sup.stage(), Stage::Grace);
     // Robot 0 exits on the shutdown sample by itself.
     os.exit(p0, "exited with code 0");
     os.reap(&mut sup);
     // Grace over: SIGTERM, then SIGCONT to the same processes.
-    let orders = sup.escalate().unwrap();
+    let orders = sup.on(Event::Overdue);
     assert_eq!(
         orders,
         vec![
@@ -262,12 +319,12 @@ fn shutdown_escalates_from_sigterm_to_sigkill_then_gives_up() {
     );
     os.carry_out(&mut sup, orders);
     let reaped = os.reap(&mut sup);
-    assert!(reaped.contains(&Reaped::Other {
+    assert!(reaped.contains(&Order::OtherEnded {
         pid: 42,
         how: "killed by signal 15".into()
     }));
     assert_eq!(sup.live_pids(), vec![p2], "only the deaf robot is left");
-    let orders = sup.escalate().unwrap();
+    let orders = sup.on(Event::Overdue);
     assert_eq!(
         orders,
         vec![Order::Signal {
@@ -277,7 +334,7 @@ fn shutdown_escalates_from_sigterm_to_sigkill_then_gives_up() {
     );
     assert_eq!(sup.stage(), Stage::Killed);
     // Suppose even SIGKILL was not reaped (a lost reaper): nothing more to send.
-    assert_eq!(sup.escalate(), None);
+    assert_eq!(sup.on(Event::Overdue), vec![Order::GiveUp]);
     assert_eq!(sup.stage(), Stage::GaveUp);
     os.carry_out(&mut sup, orders);
     os.reap(&mut sup);
@@ -287,12 +344,17 @@ fn shutdown_escalates_from_sigterm_to_sigkill_then_gives_up() {
 #[test]
 fn no_robot_is_started_once_the_run_is_ending() {
     let (mut sup, mut os) = started(2);
-    let orders = sup.shut_down();
-    os.carry_out(&mut sup, orders);
-    assert_eq!(sup.spawn(5), None);
+    os.on(&mut sup, Event::ShutDown);
+    assert_eq!(sup.on(Event::Launch { robot: 5 }), vec![]);
     let p1 = sup.pid_of(1).unwrap();
     assert_eq!(
-        sup.restart(1, 1),
+        fault(
+            &mut sup,
+            Restart {
+                robot: 1,
+                incarnation: 1
+            }
+        ),
         vec![Order::Signal {
             pids: vec![p1],
             signal: Signal::Kill
@@ -303,25 +365,33 @@ fn no_robot_is_started_once_the_run_is_ending() {
 #[test]
 fn kill_all_kills_every_process_and_unknown_pids_are_not_reaped() {
     let (mut sup, mut os) = started(2);
-    sup.watch(7);
+    os.on(&mut sup, Event::Watch { pid: 7 });
     os.procs.insert(7, State::Stopped);
-    let order = sup.kill_all();
+    let orders = sup.on(Event::KillAll);
     assert_eq!(
-        order,
-        Order::Signal {
+        orders,
+        vec![Order::Signal {
             pids: {
                 let mut p = sup.live_pids();
                 p.sort();
                 p
             },
             signal: Signal::Kill
-        }
+        }]
     );
-    os.carry_out(&mut sup, [order]);
+    os.carry_out(&mut sup, orders);
     assert_eq!(os.reap(&mut sup).len(), 3);
     assert!(sup.is_empty());
-    assert_eq!(sup.reaped(7, "again"), Reaped::Unknown);
-    assert_eq!(sup.reaped(9999, "never ours"), Reaped::Unknown);
+    let again = Event::Reaped {
+        pid: 7,
+        how: "again".into(),
+    };
+    assert_eq!(sup.on(again), vec![]);
+    let never = Event::Reaped {
+        pid: 9999,
+        how: "never ours".into(),
+    };
+    assert_eq!(sup.on(never), vec![]);
 }
 
 fn command(robot: u32, kind: CommandKind) -> Command {

@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use clap::Parser;
-use crossbeam_channel::Receiver;
+use crossbeam_channel::{Receiver, Sender};
 use iceoryx2::identifiers::UniquePublisherId;
 use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
@@ -29,8 +29,8 @@ use zenoh::sample::SampleKind;
 
 use crate::inbox;
 use crate::supervisor::hello::{Bindings, Sample};
-use crate::supervisor::launch::{self, Launch};
-use crate::supervisor::{Order, Pid, Reaped, Supervisor};
+use crate::supervisor::launch::{self, Launch, ShellSide};
+use crate::supervisor::{Ended, Event, Pid, Supervisor};
 use swarmrt_hosts::link;
 use swarmrt_hosts::wire::{Down, Up};
 
@@ -306,8 +306,11 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
     let mut relay = Relay {
         node: &node,
         ports,
-        tx: raw_tx,
-        launch,
+        shell: HostShell {
+            node: &node,
+            tx: raw_tx,
+            launch,
+        },
         sup: Supervisor::new(),
         bindings: Bindings::awaiting(robots.clone()),
         robots: robots.clone(),
@@ -321,10 +324,8 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
         flush_each: false,
         deadline: Duration::from_millis(cfg.scenario.deadline_ms),
     };
-    for id in robots {
-        if let Some(order) = relay.sup.spawn(id) {
-            relay.carry_out(order)?;
-        }
+    for robot in robots {
+        relay.on(Event::Launch { robot })?;
     }
     let failure = relay.run(&rx, &mut stats, &mut send)?;
     #[cfg(feature = "misbehave")]
@@ -333,12 +334,24 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
     // Tell the robots (a header-only sample), then see them out: EXIT_GRACE to exit on it,
     // then SIGTERM, then SIGKILL.
     relay.ports.publish_shutdown(0)?;
-    let Relay { mut sup, ports, .. } = relay;
-    launch::see_out(&mut sup, &rx, EXIT_GRACE, EXIT_GRACE, |sup, m| {
-        if let Msg::Exited(pid, how) = m {
-            reaped(sup, &node, pid, &how);
-        }
-    });
+    let Relay {
+        mut sup,
+        mut shell,
+        ports,
+        ..
+    } = relay;
+    launch::see_out(
+        &mut sup,
+        &rx,
+        (EXIT_GRACE, EXIT_GRACE),
+        &mut shell,
+        |_, m| {
+            let Msg::Exited(pid, how) = m else {
+                return None;
+            };
+            Some(Event::Reaped { pid, how })
+        },
+    );
     // The world waits for this before it closes its session, so the shutdown was delivered.
     let _ = send(&Up::Bye, &mut stats);
     drop(ports);
@@ -408,9 +421,8 @@ fn join(
 struct Relay<'a> {
     node: &'a Node<ipc::Svc>,
     ports: ipc::WorldPorts,
-    /// Where the robots' reapers report.
-    tx: crossbeam_channel::Sender<Msg>,
-    launch: Launch,
+    /// How the supervisor's orders are carried out on this host.
+    shell: HostShell<'a>,
     sup: Supervisor,
     bindings: Bindings<UniquePublisherId>,
     /// This host's robots.
@@ -588,7 +600,7 @@ impl Relay<'_> {
             Msg::ControlEof => {
                 return Ok(Some(Some("the orchestrator is gone (stdin closed)".into())));
             }
-            Msg::Exited(pid, how) => reaped(&mut self.sup, self.node, pid, &how),
+            Msg::Exited(pid, how) => self.on(Event::Reaped { pid, how })?,
         }
         Ok(None)
     }
@@ -632,52 +644,75 @@ impl Relay<'_> {
         )
     }
 
-    /// A fault the orchestrator ordered for one of this host's robots.
+    /// A fault the orchestrator ordered for one of this host's robots. A killed robot's
+    /// hello is no longer resent, nor is its publisher bound; a restarted one waits for the
+    /// fresh process's hello.
     fn order(&mut self, c: HostControl) -> std::io::Result<()> {
-        match c {
-            HostControl::Fault(fault) => {
-                let robot = fault.robot();
-                match fault {
-                    ProcessFault::Kill { .. } => {
-                        self.hellos.remove(&robot);
-                        self.bindings.forget(robot);
-                        self.sup.kill(robot).iter().for_each(launch::send);
-                    }
-                    ProcessFault::Freeze { .. } => {
-                        self.sup.freeze(robot).iter().for_each(launch::send)
-                    }
-                    ProcessFault::Thaw { .. } => self.sup.thaw(robot).iter().for_each(launch::send),
-                    ProcessFault::Restart { incarnation, .. } => {
-                        self.hellos.remove(&robot);
-                        self.bindings.expect_hello(robot);
-                        for order in self.sup.restart(robot, incarnation) {
-                            self.carry_out(order)?;
-                        }
-                    }
-                }
-            }
-            HostControl::Stop | HostControl::Config { .. } => {}
-        }
-        Ok(())
-    }
-
-    /// Carries out a supervisor order; a spawned robot is reported as started.
-    fn carry_out(&mut self, order: Order) -> std::io::Result<()> {
-        let Order::Spawn { robot, incarnation } = order else {
-            launch::send(&order);
+        let HostControl::Fault(fault) = c else {
             return Ok(());
         };
+        let robot = fault.robot();
+        match fault {
+            ProcessFault::Kill { .. } => {
+                self.hellos.remove(&robot);
+                self.bindings.forget(robot);
+            }
+            ProcessFault::Restart { .. } => {
+                self.hellos.remove(&robot);
+                self.bindings.expect_hello(robot);
+            }
+            ProcessFault::Freeze { .. } | ProcessFault::Thaw { .. } => {}
+        }
+        self.on(Event::Fault(fault))
+    }
+
+    /// Tells the supervisor `event` and carries out its orders; a robot that cannot be
+    /// started fails the host.
+    fn on(&mut self, event: Event) -> std::io::Result<()> {
+        launch::handle(&mut self.sup, event, &mut self.shell)
+    }
+}
+
+/// This host's side of the supervisor's orders: robots start with reapers reporting on the
+/// main loop's channel, and each start and end is reported to the orchestrator.
+struct HostShell<'a> {
+    node: &'a Node<ipc::Svc>,
+    /// Where the robots' reapers report.
+    tx: Sender<Msg>,
+    launch: Launch,
+}
+
+impl ShellSide for HostShell<'_> {
+    type Error = std::io::Error;
+
+    fn spawn(&mut self, robot: u32, incarnation: u32) -> std::io::Result<Pid> {
         let tx = self.tx.clone();
-        let pid = launch::spawn(&self.launch, robot, incarnation, move |pid, how| {
+        launch::spawn(&self.launch, robot, incarnation, move |pid, how| {
             let _ = tx.send(Msg::Exited(pid, how));
-        })?;
-        self.sup.started(robot, incarnation, pid);
+        })
+    }
+
+    fn started(&mut self, robot: u32, incarnation: u32, pid: Pid) {
         report(&HostReport::Started {
             robot,
             incarnation,
             pid,
         });
-        Ok(())
+    }
+
+    fn not_started(&mut self, _: u32, _: u32, e: std::io::Error) -> std::io::Result<()> {
+        Err(e)
+    }
+
+    fn ended(&mut self, e: Ended) {
+        // Its ports go, returning the observation samples it held.
+        let _ = self.node.try_cleanup_dead_nodes();
+        report(&HostReport::Exited {
+            robot: e.robot,
+            pid: e.pid,
+            how: e.how,
+            ordered: e.ordered,
+        });
     }
 }
 
@@ -732,18 +767,5 @@ impl Drop for Flood {
         if let Some(sent) = self.thread.take().and_then(|t| t.join().ok()) {
             tracing::debug!(sent, "flood stopped");
         }
-    }
-}
-
-fn reaped(sup: &mut Supervisor, node: &Node<ipc::Svc>, pid: Pid, how: &str) {
-    if let Reaped::Robot(e) = sup.reaped(pid, how) {
-        // Its ports go, returning the observation samples it held.
-        let _ = node.try_cleanup_dead_nodes();
-        report(&HostReport::Exited {
-            robot: e.robot,
-            pid,
-            how: e.how,
-            ordered: e.ordered,
-        });
     }
 }

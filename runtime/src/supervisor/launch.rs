@@ -1,15 +1,17 @@
 //! The I/O half of the [`Supervisor`]: a robot's command line (built here and nowhere else),
-//! one reaper thread per child, signals, and the shutdown wait.
+//! one reaper thread per child, the one [`carry_out`] of orders every shell uses (`swarm`,
+//! `swarm-host`), and the shutdown wait.
 
+use std::collections::VecDeque;
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
+use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use crossbeam_channel::{Receiver, RecvTimeoutError};
 use swarmrt_protocol::services::RunServices;
 use swarmrt_scenario::process::{child_command, describe, signal_all};
 
-use super::{Order, Pid, Stage, Supervisor};
+use super::{Ended, Event, Order, Pid, Signal, Stage, Supervisor};
 
 /// How to start the robots of one host.
 #[derive(Debug, Clone)]
@@ -65,18 +67,15 @@ pub fn robot_command(l: &Launch, robot: u32, incarnation: u32) -> Command {
     cmd
 }
 
-/// Starts `robot`'s process of `incarnation` with its reaper; `exited(pid, how)` is called
-/// from the reaper when it ends. Returns its pid.
-pub fn spawn(
-    l: &Launch,
-    robot: u32,
-    incarnation: u32,
+/// Starts `cmd` with its reaper; `exited(pid, how)` is called from the reaper when it ends.
+/// The `Child` is returned for its pipes only: the reaper owns its end, so it is never waited
+/// for (dropping it does not wait either).
+pub fn start(
+    cmd: &mut Command,
     exited: impl FnOnce(Pid, String) + Send + 'static,
-) -> std::io::Result<Pid> {
-    let child = robot_command(l, robot, incarnation).spawn()?;
+) -> std::io::Result<Child> {
+    let child = cmd.spawn()?;
     let pid = child.id() as Pid;
-    // The reaper owns the child's end; `Child` is dropped without waiting.
-    drop(child);
     reap(pid, None, exited).inspect_err(|_| {
         // No reaper: kill and reap it here so it cannot outlive the run unseen.
         signal_all(&[pid], libc::SIGKILL);
@@ -84,7 +83,18 @@ pub fn spawn(
         // SAFETY: waitpid on our own child, just sent SIGKILL, so this returns promptly.
         unsafe { libc::waitpid(pid, &mut status, 0) };
     })?;
-    Ok(pid)
+    Ok(child)
+}
+
+/// Starts `robot`'s process of `incarnation` with its reaper (see [`start`]); returns its pid.
+pub fn spawn(
+    l: &Launch,
+    robot: u32,
+    incarnation: u32,
+    exited: impl FnOnce(Pid, String) + Send + 'static,
+) -> std::io::Result<Pid> {
+    let child = start(&mut robot_command(l, robot, incarnation), exited)?;
+    Ok(child.id() as Pid)
 }
 
 /// Reaps one child: a small thread blocked in `waitpid(pid)`, so iceoryx2 never sees a
@@ -123,52 +133,128 @@ pub fn reap(
         .map(|_| ())
 }
 
-/// Carries out a signal order (a spawn order is the shell's: it needs its reaper channel).
-pub fn send(order: &Order) {
-    if let Order::Signal { pids, signal } = order {
+/// What one shell (`swarm`, `swarm-host`, a test's fake process table) does for the
+/// supervisor's orders: its own way to start a robot, and whom it tells about ends.
+pub trait ShellSide {
+    /// What a failed start makes of the run (`Infallible` where it is only recorded).
+    type Error;
+
+    /// Starts `robot`'s process of `incarnation`, its reaper reporting to the shell's loop.
+    fn spawn(&mut self, robot: u32, incarnation: u32) -> std::io::Result<Pid>;
+
+    /// A spawned robot process runs as `pid` (the supervisor knows already).
+    fn started(&mut self, _robot: u32, _incarnation: u32, _pid: Pid) {}
+
+    /// `robot`'s process of `incarnation` could not be started.
+    fn not_started(
+        &mut self,
+        robot: u32,
+        incarnation: u32,
+        e: std::io::Error,
+    ) -> Result<(), Self::Error>;
+
+    /// A robot process was reaped.
+    fn ended(&mut self, ended: Ended);
+
+    /// One of the other watched processes (the world, a host launcher) was reaped.
+    fn other_ended(&mut self, _pid: Pid, _how: String) {}
+
+    /// Sends `signal` to `pids`.
+    fn signal(&mut self, pids: &[Pid], signal: Signal) {
         signal_all(pids, signal.raw());
     }
 }
 
+/// Performs `orders` through `shell`: signals are sent, spawns started (their pids fed back
+/// as [`Event::Started`], whose orders are performed in turn), ends handed over. A failed
+/// start is the shell's to judge; an `Err` stops here. [`Order::GiveUp`] needs nothing done.
+pub fn carry_out<S: ShellSide>(
+    sup: &mut Supervisor,
+    orders: Vec<Order>,
+    shell: &mut S,
+) -> Result<(), S::Error> {
+    let mut orders = VecDeque::from(orders);
+    while let Some(order) = orders.pop_front() {
+        match order {
+            Order::Signal { pids, signal } => shell.signal(&pids, signal),
+            Order::Spawn { robot, incarnation } => match shell.spawn(robot, incarnation) {
+                Ok(pid) => {
+                    orders.extend(sup.on(Event::Started {
+                        robot,
+                        incarnation,
+                        pid,
+                    }));
+                    shell.started(robot, incarnation, pid);
+                }
+                Err(e) => shell.not_started(robot, incarnation, e)?,
+            },
+            Order::Ended(e) => shell.ended(e),
+            Order::OtherEnded { pid, how } => shell.other_ended(pid, how),
+            Order::GiveUp => {}
+        }
+    }
+    Ok(())
+}
+
+/// Tells `sup` about `event` and performs what it orders through `shell`.
+pub fn handle<S: ShellSide>(
+    sup: &mut Supervisor,
+    event: Event,
+    shell: &mut S,
+) -> Result<(), S::Error> {
+    let orders = sup.on(event);
+    carry_out(sup, orders, shell)
+}
+
 /// Sees every process of `sup` out: `grace` to go by themselves, then SIGTERM (with
-/// SIGCONT), then SIGKILL, `step` apart, and gives up after that. `handle` gets every
-/// message; it feeds exits to [`Supervisor::reaped`] (and may [`Supervisor::kill_all`]).
-pub fn see_out<M>(
+/// SIGCONT), then SIGKILL, `step` apart, and gives up after that. `event` makes of each
+/// message what the supervisor must hear, if anything (an exit is [`Event::Reaped`], a
+/// second Ctrl-C [`Event::KillAll`]); the clock is this loop's, the rules the supervisor's.
+pub fn see_out<M, S: ShellSide>(
     sup: &mut Supervisor,
     rx: &Receiver<M>,
-    grace: Duration,
-    step: Duration,
-    mut handle: impl FnMut(&mut Supervisor, M),
+    (grace, step): (Duration, Duration),
+    shell: &mut S,
+    mut event: impl FnMut(&mut S, M) -> Option<Event>,
 ) {
-    sup.shut_down().iter().for_each(send);
+    let perform = |sup: &mut Supervisor, shell: &mut S, orders| {
+        if carry_out(sup, orders, shell).is_err() {
+            // Only a start can fail, and no robot starts once the run is ending.
+            tracing::error!("an order failed while the run's processes were seen out");
+        }
+    };
+    let orders = sup.on(Event::ShutDown);
+    perform(sup, shell, orders);
     let mut until = Instant::now() + grace;
     while !sup.is_empty() {
         let stage = sup.stage();
         match rx.recv_timeout(until.saturating_duration_since(Instant::now())) {
             Ok(m) => {
-                handle(sup, m);
+                if let Some(e) = event(shell, m) {
+                    let orders = sup.on(e);
+                    perform(sup, shell, orders);
+                }
                 if sup.stage() != stage {
                     until = Instant::now() + step;
                 }
             }
-            Err(RecvTimeoutError::Timeout) => match sup.escalate() {
-                Some(orders) => {
-                    if sup.stage() == Stage::Killed {
-                        tracing::warn!(pids = ?sup.live_pids(), "processes did not exit in time; killing them");
-                    } else {
-                        tracing::debug!(
-                            count = sup.live_pids().len(),
-                            "processes still running; sending SIGTERM"
-                        );
-                    }
-                    orders.iter().for_each(send);
-                    until = Instant::now() + step;
-                }
-                None => {
+            Err(RecvTimeoutError::Timeout) => {
+                let orders = sup.on(Event::Overdue);
+                if orders.contains(&Order::GiveUp) {
                     tracing::error!(pids = ?sup.live_pids(), "processes could not be reaped");
                     return;
                 }
-            },
+                if sup.stage() == Stage::Killed {
+                    tracing::warn!(pids = ?sup.live_pids(), "processes did not exit in time; killing them");
+                } else {
+                    tracing::debug!(
+                        count = sup.live_pids().len(),
+                        "processes still running; sending SIGTERM"
+                    );
+                }
+                perform(sup, shell, orders);
+                until = Instant::now() + step;
+            }
             Err(RecvTimeoutError::Disconnected) => return,
         }
     }
