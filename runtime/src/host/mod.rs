@@ -23,14 +23,16 @@ use swarmrt_ipc::{self as ipc, IpcError};
 use swarmrt_protocol::Command;
 use swarmrt_protocol::control::{HostControl, HostReport, ProcessFault};
 use swarmrt_protocol::services::{RunServices, valid_run_id};
+#[cfg(feature = "misbehave")]
 use zenoh::Wait;
-use zenoh::qos::CongestionControl;
-use zenoh::sample::SampleKind;
 
 use crate::inbox;
+mod session;
+
 use crate::supervisor::hello::{Bindings, Sample};
 use crate::supervisor::launch::{self, Launch, ShellSide};
 use crate::supervisor::{Ended, Event, Pid, Supervisor};
+use session::HostLink;
 use swarmrt_hosts::link;
 use swarmrt_hosts::wire::{Down, Up};
 
@@ -171,123 +173,28 @@ fn read_config(run: &RunServices) -> Result<(swarmrt_scenario::Config, String, P
 fn serve(args: &Args) -> Result<HostStats, IpcError> {
     let run = RunServices::new(&args.run_id);
     let (cfg, toml, dir) = read_config(&run)?;
-    let (first, count) = (args.first, args.count as usize);
-    if count == 0 || first as u64 + count as u64 > cfg.robots.count as u64 {
-        return Err(format!(
-            "robots {first}..{} are not robots of this run (robots.count = {})",
-            first as u64 + count as u64,
-            cfg.robots.count
-        )
-        .into());
-    }
-    let agent = std::env::current_exe()?
-        .parent()
-        .map(|d| d.join("swarm-agent"))
-        .filter(|p| p.exists())
-        .ok_or("cannot find swarm-agent beside swarm-host")?;
+    let robots = robots_of(args, &cfg)?;
+    let count = robots.len();
+    let agent = agent_beside()?;
     let _ = ipc::raise_fd_limit();
     let node = ipc::node(&run, &format!("swarmrt-{}-host", args.run_id))?;
     let observers = cfg.ipc.observers as usize;
-    let services = ipc::create_services(
-        &node,
-        &run,
-        first..first + count as u32,
-        cfg.faults.restart.len(),
-        observers,
-    )?;
+    let restarts = cfg.faults.restart.len();
+    let services = ipc::create_services(&node, &run, robots.clone(), restarts, observers)?;
     let ports = ipc::WorldPorts::open(&services, count, observers)?;
     let (raw_tx, raw_rx) = crossbeam_channel::unbounded::<Msg>();
     let rx = ipc::wake_relay(&run, format!("swarmrt-{}-host-relay", args.run_id), raw_rx)?;
     spawn_stdin_reader(raw_tx.clone());
-
-    let (ca, (cert, key)) = match &args.certs {
-        Some(dir) => (
-            swarmrt_hosts::certs::ca_cert(dir),
-            swarmrt_hosts::certs::host_pair(dir, &args.host),
-        ),
-        None => Default::default(),
-    };
-    let tls = if args.connect.starts_with("quic/") {
-        if args.certs.is_none() {
-            return Err("a quic/ endpoint needs --certs (the directory swarm certs wrote)".into());
-        }
-        for p in [&ca, &cert, &key] {
-            if !p.is_file() {
-                return Err(format!(
-                    "{} is missing on this host (swarm certs writes it; copy it here)",
-                    p.display()
-                )
-                .into());
-            }
-        }
-        let named = swarmrt_hosts::certs::common_name(&cert)?;
-        if named != args.host {
-            return Err(format!(
-                "{} names host {named:?}, not {:?}: the world would refuse everything it says; use this host's own certificate",
-                cert.display(),
-                args.host
-            )
-            .into());
-        }
-        link::Tls::Mutual {
-            ca: &ca,
-            cert: &cert,
-            key: &key,
-        }
-    } else {
-        link::Tls::Insecure
-    };
-    let session = link::host_session(&args.connect, count, tls).map_err(|e| {
-        format!(
-            "cannot reach the world at {}: {e} (with quic/: is {} signed by the run's CA, and does the world's certificate name this address?)",
-            args.connect,
-            cert.display()
-        )
-    })?;
-    let tx = raw_tx.clone();
-    let _down = session
-        .declare_subscriber(link::down_key(&args.run_id, &args.host))
-        .callback(move |sample| {
-            let bytes = sample.payload().to_bytes();
-            let _ = tx.send(match Down::decode(&bytes, count) {
-                Ok(d) => Msg::Down(d, bytes.len()),
-                Err(_) => Msg::Malformed,
-            });
-        })
-        .wait()?;
-    let tx = raw_tx.clone();
-    let _world_alive = session
-        .liveliness()
-        .declare_subscriber(link::world_token(&args.run_id))
-        .callback(move |sample| {
-            if sample.kind() == SampleKind::Delete {
-                let _ = tx.send(Msg::WorldLost);
-            }
-        })
-        .wait()?;
-    let up = session
-        .declare_publisher(link::up_key(&args.run_id, &args.host))
-        .congestion_control(CongestionControl::Block)
-        .express(true)
-        .wait()?;
-    let _token = session
-        .liveliness()
-        .declare_token(link::host_token(&args.run_id, &args.host))
-        .wait()?;
+    let link = HostLink::open(args, count, &raw_tx)?;
     let mut stats = HostStats {
         host: args.host.clone(),
         ..HostStats::default()
     };
-    let mut send = |msg: &Up, stats: &mut HostStats| -> Result<(), IpcError> {
-        let bytes = msg.encode();
-        stats.bytes_up += bytes.len() as u64;
-        up.put(bytes).wait()?;
-        Ok(())
-    };
+    let mut send = |msg: &Up, stats: &mut HostStats| link.send(msg, stats);
     join(args, &toml, &rx, &mut |m| send(m, &mut stats))?;
     report(&HostReport::Joined);
     #[cfg(feature = "misbehave")]
-    let flood = Flood::from_env(&session, &args.run_id, &args.host);
+    let flood = Flood::from_env(link.session(), &args.run_id, &args.host);
 
     // `cd <this dir> && iox2 service list` on this host sees the run's local services.
     let ipc_config = dir.join("config/iceoryx2.toml");
@@ -297,71 +204,59 @@ fn serve(args: &Args) -> Result<HostStats, IpcError> {
         run: run.clone(),
         config: dir.join("config.toml"),
         storage: dir.join("storage"),
-        first,
+        first: args.first,
         cfg: cfg.clone(),
         ipc_config,
         quiet: true,
     };
-    let robots = first..first + count as u32;
-    let mut relay = Relay {
+    let shell = HostShell {
         node: &node,
-        ports,
-        shell: HostShell {
-            node: &node,
-            tx: raw_tx,
-            launch,
-        },
-        sup: Supervisor::new(),
-        bindings: Bindings::awaiting(robots.clone()),
-        robots: robots.clone(),
-        expect: BTreeSet::new(),
-        batch: Vec::new(),
-        lane: false,
-        tick: 0,
-        answered: BTreeMap::new(),
-        hellos: BTreeMap::new(),
-        tick_at: Instant::now(),
-        flush_each: false,
-        deadline: Duration::from_millis(cfg.scenario.deadline_ms),
+        tx: raw_tx,
+        launch,
     };
+    let mut relay = Relay::new(&node, ports, shell, robots.clone(), &cfg);
     for robot in robots {
         relay.on(Event::Launch { robot })?;
     }
     let failure = relay.run(&rx, &mut stats, &mut send)?;
     #[cfg(feature = "misbehave")]
     drop(flood);
-
-    // Tell the robots (a header-only sample), then see them out: EXIT_GRACE to exit on it,
-    // then SIGTERM, then SIGKILL.
-    relay.ports.publish_shutdown(0)?;
-    let Relay {
-        mut sup,
-        mut shell,
-        ports,
-        ..
-    } = relay;
-    launch::see_out(
-        &mut sup,
-        &rx,
-        (EXIT_GRACE, EXIT_GRACE),
-        &mut shell,
-        |_, m| {
-            let Msg::Exited(pid, how) = m else {
-                return None;
-            };
-            Some(Event::Reaped { pid, how })
-        },
-    );
+    relay.see_out(&rx)?;
     // The world waits for this before it closes its session, so the shutdown was delivered.
     let _ = send(&Up::Bye, &mut stats);
-    drop(ports);
     drop(services);
     drop(node);
-    let _ = session.close().wait();
+    link.close();
     match failure {
         None => Ok(stats),
         Some(f) => Err(f.into()),
     }
+}
+
+/// The robots `--first` and `--count` name, refused when they are not robots of this run.
+fn robots_of(
+    args: &Args,
+    cfg: &swarmrt_scenario::Config,
+) -> Result<std::ops::Range<u32>, IpcError> {
+    let (first, count) = (args.first, args.count);
+    if count == 0 || first as u64 + count as u64 > cfg.robots.count as u64 {
+        return Err(format!(
+            "robots {first}..{} are not robots of this run (robots.count = {})",
+            first as u64 + count as u64,
+            cfg.robots.count
+        )
+        .into());
+    }
+    Ok(first..first + count)
+}
+
+/// The `swarm-agent` binary installed beside this one.
+fn agent_beside() -> Result<PathBuf, IpcError> {
+    Ok(std::env::current_exe()?
+        .parent()
+        .map(|d| d.join("swarm-agent"))
+        .filter(|p| p.exists())
+        .ok_or("cannot find swarm-agent beside swarm-host")?)
 }
 
 /// Relays the orchestrator's control lines (through the launcher's stdin) to the main loop.
@@ -450,6 +345,54 @@ struct Relay<'a> {
 
 /// Sends a message up to the world, counting its bytes.
 type SendUp<'s> = dyn FnMut(&Up, &mut HostStats) -> Result<(), IpcError> + 's;
+
+impl<'a> Relay<'a> {
+    /// Nothing relayed yet: every robot of `robots` waits for its hello.
+    fn new(
+        node: &'a Node<ipc::Svc>,
+        ports: ipc::WorldPorts,
+        shell: HostShell<'a>,
+        robots: std::ops::Range<u32>,
+        cfg: &swarmrt_scenario::Config,
+    ) -> Relay<'a> {
+        Relay {
+            node,
+            ports,
+            shell,
+            sup: Supervisor::new(),
+            bindings: Bindings::awaiting(robots.clone()),
+            robots,
+            expect: BTreeSet::new(),
+            batch: Vec::new(),
+            lane: false,
+            tick: 0,
+            answered: BTreeMap::new(),
+            hellos: BTreeMap::new(),
+            tick_at: Instant::now(),
+            flush_each: false,
+            deadline: Duration::from_millis(cfg.scenario.deadline_ms),
+        }
+    }
+
+    /// Tells the robots the run is over (a header-only sample), then sees them out:
+    /// EXIT_GRACE to exit on it, then SIGTERM, then SIGKILL.
+    fn see_out(mut self, rx: &Receiver<Msg>) -> Result<(), IpcError> {
+        self.ports.publish_shutdown(0)?;
+        launch::see_out(
+            &mut self.sup,
+            rx,
+            (EXIT_GRACE, EXIT_GRACE),
+            &mut self.shell,
+            |_, m| {
+                let Msg::Exited(pid, how) = m else {
+                    return None;
+                };
+                Some(Event::Reaped { pid, how })
+            },
+        );
+        Ok(())
+    }
+}
 
 impl Relay<'_> {
     /// Relays until the world's shutdown, a Stop, or a failure (returned as its reason).
@@ -740,7 +683,7 @@ impl Flood {
         // Not express: Zenoh batches the small messages, as fast as the link goes.
         let up = session
             .declare_publisher(link::up_key(run_id, host))
-            .congestion_control(CongestionControl::Block)
+            .congestion_control(zenoh::qos::CongestionControl::Block)
             .wait()
             .ok()?;
         let stop = std::sync::Arc::new(AtomicBool::new(false));
