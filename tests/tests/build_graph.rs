@@ -72,6 +72,66 @@ fn the_core_crates_link_no_shared_memory_network_or_command_line_stack() {
     }
 }
 
+/// The crates of the fast lane (`cargo test-fast`, `.cargo/config.toml`).
+const FAST_LANE: [&str; 6] = [
+    "swarmrt-protocol",
+    "swarmrt-scenario",
+    "swarmrt-planner",
+    "swarmrt-world",
+    "swarmrt-agent",
+    "swarmrt-harness",
+];
+
+/// What the fast lane must not build, tests included: shared memory, the network, the web,
+/// a browser, plots and the MCAP container.
+const HEAVY: [&str; 11] = [
+    "iceoryx2",
+    "zenoh",
+    "tokio",
+    "hyper",
+    "axum",
+    "fantoccini",
+    "plotters",
+    "image",
+    "mcap",
+    "rustls",
+    "clap",
+];
+
+/// The heavy crates in `krate`'s normal and dev dependency trees.
+fn heavy_in(krate: &str) -> Vec<String> {
+    let mut found: Vec<String> = cargo_tree(&["-p", krate, "-e", "normal,dev"])
+        .iter()
+        .filter_map(|l| l.split(' ').next())
+        .filter(|name| HEAVY.contains(name))
+        .map(str::to_string)
+        .collect();
+    found.sort();
+    found.dedup();
+    found
+}
+
+#[test]
+fn the_fast_lane_builds_no_network_web_browser_or_plotting_crate() {
+    for krate in FAST_LANE {
+        assert_eq!(heavy_in(krate), Vec::<String>::new(), "{krate}");
+    }
+    // The lane is what the alias runs.
+    let alias = std::fs::read_to_string(workspace().join(".cargo/config.toml")).unwrap();
+    for krate in FAST_LANE {
+        assert!(alias.contains(&format!("-p {krate}")), "test-fast runs {krate}");
+    }
+}
+
+/// The check can fail: the end-to-end tests, which drive a browser, are seen building one.
+#[test]
+fn the_heavy_crates_are_seen_where_they_are() {
+    let heavy = heavy_in("swarmrt-tests");
+    for krate in ["fantoccini", "iceoryx2", "tokio"] {
+        assert!(heavy.contains(&krate.to_string()), "{krate} in {heavy:?}");
+    }
+}
+
 /// The check can fail: the runtime, which is the shells, links them.
 #[test]
 fn the_shells_are_seen_linking_them() {
