@@ -1,15 +1,15 @@
 //! `metrics.json`: what a run reports, as one struct serialised once ([`Metrics::to_json`]).
 //!
 //! Each section is typed by the crate that computes it: the world's counters by
-//! `swarmrt_world`, the consensus section by the checker (`swarmrt_analysis::consensus_check`), what the
+//! `swarmrt_world`, the consensus section by the checker (`swarmrt_harness::consensus_check`), what the
 //! records say by `swarmrt_analysis` (a behaviour's own metrics as its registry entry names
 //! them). The file's keys are sorted at every level, as they always have been (serde_json's
 //! map orders by key), so the field order here follows the run, not the file.
 
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
-use swarmrt_analysis::consensus_check::ConsensusReport;
 use swarmrt_analysis::metrics::RecordMetrics;
+use swarmrt_harness::consensus_check::ConsensusReport;
 use swarmrt_world::WorldMetrics;
 
 use crate::processes::RobotProcess;

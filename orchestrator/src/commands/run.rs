@@ -374,9 +374,7 @@ fn ended_metrics(
     if cfg.consensus.is_some() {
         // From the record alone, so both modes give the same numbers.
         let events = std::fs::read_to_string(out.join("events.jsonl")).unwrap_or_default();
-        ended.consensus = Some(swarmrt_analysis::consensus_check::consensus_metrics(
-            &events,
-        ));
+        ended.consensus = Some(swarmrt_harness::consensus_check::consensus_metrics(&events));
     }
     metrics
 }
