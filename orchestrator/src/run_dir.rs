@@ -15,7 +15,6 @@ use swarmrt_scenario::Config;
 use swarmrt_scenario::safe_fs::{self, DirRefused, Open, OutDir};
 
 use crate::error::{SwarmError, SwarmResult};
-use crate::metrics::Metrics;
 
 use swarmrt_analysis::plot::trajectory::{write_side_view_plots, write_trajectory_plots};
 
@@ -369,15 +368,15 @@ pub fn reserve_metrics_room(dir: &OutDir, robots: u32) {
     }
 }
 
-/// Writes `metrics.json` atomically (`metrics.json.tmp` + rename): never a truncated file.
+/// Writes `text` (`swarm run`'s `Metrics::to_json`) as `metrics.json`, atomically
+/// (`metrics.json.tmp` + rename): never a truncated file.
 /// Frees the room [`reserve_metrics_room`] set aside first. If the write fails (a full disk)
 /// the temporary file is removed rather than left half written. A symbolic link at either
 /// name is refused, never followed.
-pub fn write_metrics(dir: &OutDir, metrics: &Metrics) -> anyhow::Result<()> {
+pub fn write_metrics(dir: &OutDir, text: String) -> anyhow::Result<()> {
     if dir.stat(METRICS_ROOM).is_some_and(|e| !e.is_symlink) {
         let _ = dir.remove_file(METRICS_ROOM);
     }
-    let text = metrics.to_json()?;
     dir.write_replace("metrics.json", text)
         .with_context(|| format!("cannot write {}", dir.join("metrics.json").display()))
 }
@@ -487,18 +486,6 @@ fn truncate(dir: &OutDir, name: &str, len: u64) -> anyhow::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::metrics::{Mode, RunHeader};
-
-    /// A `metrics.json` to write.
-    fn metrics() -> Metrics {
-        let run = RunHeader {
-            scenario: "links".to_string(),
-            seed: 1,
-            mode: Mode::InProcess,
-            agents: 2,
-        };
-        Metrics::failed_early(run, "a test".to_string(), 0, 0.0)
-    }
 
     #[test]
     fn unused_dir_gives_racing_callers_distinct_new_directories() {
@@ -720,7 +707,10 @@ mod tests {
             if name == METRICS_ROOM {
                 assert!(std::fs::symlink_metadata(&link).unwrap().is_symlink());
             } else {
-                let e = format!("{:#}", write_metrics(&out(&dir), &metrics()).unwrap_err());
+                let e = format!(
+                    "{:#}",
+                    write_metrics(&out(&dir), "{}\n".to_string()).unwrap_err()
+                );
                 assert!(e.ends_with(&refused(&link)), "{e}");
             }
             assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep", "{name}");

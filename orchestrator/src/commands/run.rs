@@ -308,7 +308,7 @@ fn finish(
     let dir = out.path().to_path_buf();
     let failure = ran.failure.clone();
     let metrics = ended_metrics(cfg, out, header, ran, started);
-    if let Err(e) = run_dir::write_metrics(out, &metrics) {
+    if let Err(e) = write_metrics(out, &metrics) {
         if failure.is_none() {
             return Err(e.into());
         }
@@ -406,7 +406,7 @@ fn failed_early(
     let ticks = trimmed_ticks(dir, cfg).unwrap_or(0);
     let wall = started.elapsed().as_secs_f64();
     let metrics = Metrics::failed_early(header, format!("{e:#}"), ticks, wall);
-    if let Err(w) = run_dir::write_metrics(dir, &metrics) {
+    if let Err(w) = write_metrics(dir, &metrics) {
         tracing::warn!("{w:#}");
     }
     println!("{}", dir.path().display());
@@ -414,6 +414,11 @@ fn failed_early(
         "{e:#}; records up to the last whole tick are in {}",
         dir.path().display()
     ))
+}
+
+/// Writes `metrics.json` (atomically, into the room set aside for it).
+fn write_metrics(out: &OutDir, metrics: &Metrics) -> anyhow::Result<()> {
+    run_dir::write_metrics(out, metrics.to_json()?)
 }
 
 /// Cuts the records back to their last whole tick and returns it (0 without a whole tick,
