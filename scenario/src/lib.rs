@@ -26,6 +26,7 @@
 
 pub mod angle;
 pub mod behaviour;
+pub mod bounds;
 pub mod config;
 pub mod consensus;
 pub mod error;
