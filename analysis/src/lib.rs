@@ -5,7 +5,6 @@
 //! - [`metrics`]: the metrics registry: what every run gets from its records, plus each
 //!   behaviour's own (found through `swarmrt_agent::registry`).
 //! - [`series`]: a behaviour's per-tick tables (`<name>.csv`) and their plots.
-//! - [`consensus_check`]: Raft's safety properties and the consensus metrics, from the notes.
 //! - [`sweep_csv`]: `sweep.csv`, one row per finished run of a sweep.
 //! - [`stats`]: a sweep's rows grouped by combination, with their statistics.
 //! - [`export`]: a run in other formats (`swarm export --mcap`: MCAP for Foxglove).
@@ -13,7 +12,6 @@
 //!   benchmarks'.
 #![warn(missing_docs)]
 
-pub mod consensus_check;
 pub mod export;
 pub mod metrics;
 pub mod plot;

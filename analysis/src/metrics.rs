@@ -3,9 +3,11 @@
 //! Metrics every run gets are here; a behaviour's own live in its folder
 //! (`agent/src/behaviours/<name>/`) and are found through the agent's registry.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
-use serde_json::{Value, json};
+use serde::Serialize;
+use serde_json::Value;
 use swarmrt_protocol::records::Records;
 use swarmrt_scenario::Config;
 
@@ -18,24 +20,37 @@ pub fn names(cfg: &Config) -> Vec<&'static str> {
     names
 }
 
-/// Metrics every run gets, plus the behaviour's own, as a JSON object to merge into
-/// metrics.json.
-pub fn from_records(cfg: &Config, dir: &Path) -> anyhow::Result<Value> {
+/// What a run's records say (`metrics.json`'s `steps_to_target`, `energy_saving` and the
+/// behaviour's own keys, side by side at the top).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RecordMetrics {
+    /// See [`steps_to_target`].
+    pub steps_to_target: Option<u64>,
+    /// See [`energy_saving`].
+    pub energy_saving: Option<f64>,
+    /// The behaviour's metrics as its registry entry names them (`flocking`,
+    /// `formation_error_rms`, ...); none for a behaviour without metrics of its own.
+    #[serde(flatten)]
+    pub behaviour: BTreeMap<&'static str, Value>,
+}
+
+/// Metrics every run gets, plus the behaviour's own.
+pub fn from_records(cfg: &Config, dir: &Path) -> anyhow::Result<RecordMetrics> {
     let rec = crate::run_dir::read(dir)?;
-    let mut out = json!({
-        "steps_to_target": steps_to_target(&rec),
-        "energy_saving": energy_saving(&rec),
-    });
-    if let Some(p) = swarmrt_agent::registry::plugin(&cfg.behaviour.kind) {
-        let own = p
+    let behaviour = match swarmrt_agent::registry::plugin(&cfg.behaviour.kind) {
+        Some(p) => p
             .configure(cfg)
             .map_err(|(key, message)| anyhow::anyhow!("key `{key}`: {message}"))?
-            .metrics(&rec);
-        for (k, v) in own {
-            out[k] = v;
-        }
-    }
-    Ok(out)
+            .metrics(&rec)
+            .into_iter()
+            .collect(),
+        None => BTreeMap::new(),
+    };
+    Ok(RecordMetrics {
+        steps_to_target: steps_to_target(&rec),
+        energy_saving: energy_saving(&rec),
+        behaviour,
+    })
 }
 
 /// Tick at which the last robot that reached the target got there; `None` if none did.
@@ -76,6 +91,7 @@ pub fn lookup(metrics: &Value, path: &str) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::json;
 
     #[test]
     fn lookup_follows_dotted_paths() {

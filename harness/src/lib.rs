@@ -8,6 +8,8 @@
 //! - [`raft_net`]: Raft cores alone in an in-memory network with cut links.
 //! - [`fuzz`]: real agents over the world's radio medium with crashes, restarts and
 //!   partitions, checked every tick (`swarm fuzz`).
+//! - [`consensus_check`]: Raft's safety properties and the consensus metrics, from the notes
+//!   alone (`events.jsonl`, or the fuzz drivers' note stream in memory).
 //! - [`config`]: [`config::load_run_config`], a scenario file and its `--set` as a run needs
 //!   them (schema and bounds, `[behaviour]`, map and start layout, robot programs).
 //!
@@ -34,6 +36,7 @@
 #![warn(missing_docs)]
 
 pub mod config;
+pub mod consensus_check;
 pub mod fuzz;
 pub mod lockstep;
 pub mod raft_net;

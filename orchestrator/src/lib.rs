@@ -9,6 +9,7 @@ pub mod commands;
 pub mod config;
 pub mod error;
 pub mod hosts;
+pub mod metrics;
 pub mod processes;
 pub mod run_dir;
 pub mod sweep;

@@ -231,13 +231,13 @@ pub struct RobotsConfig {
     #[serde(
         default,
         skip_serializing_if = "Vec::is_empty",
-        deserialize_with = "crate::program::command_line"
+        deserialize_with = "crate::programs::command_line"
     )]
     pub program: Vec<String>,
     /// Programs for one robot or a range of them; later entries win
     /// (`program = ["swarm-agent"]` puts the built-in robot back).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub programs: Vec<crate::program::ProgramFor>,
+    pub programs: Vec<crate::programs::ProgramFor>,
 }
 
 /// `[robots.aerial]`: what makes robots aerial. Their horizontal speed is limited by

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::reference::{KEYS, hi, lo};
+use crate::bounds::{Bounds, Key, k, r};
 
 /// The fault schedule.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -96,6 +96,52 @@ fn is_zero(v: &f64) -> bool {
 /// the old process's ports are reclaimed.
 pub const MAX_RESTARTS: usize = 256;
 
+#[rustfmt::skip]
+mod keys {
+    use super::*;
+
+    /// `faults.kill_rate`.
+    pub const KILL_RATE: Key = k("faults.kill_rate", r(0.0, 1.0), "", "Probability per running robot per tick that its process is killed.").absent("0.0");
+    /// `faults.freeze_rate`.
+    pub const FREEZE_RATE: Key = k("faults.freeze_rate", r(0.0, 1.0), "", "Probability per running robot per tick that it is frozen.").absent("0.0");
+    /// `faults.freeze_ticks`.
+    pub const FREEZE_TICKS: Key = k("faults.freeze_ticks", r(1.0, 1_000_000.0), "ticks", "Length of a random freeze.");
+    /// `faults.kill[i].tick`.
+    pub const KILL_TICK: Key = k("faults.kill[i].tick", Bounds::Any, "tick", "Tick from which the robot is dead.");
+    /// `faults.kill[i].robot`.
+    pub const KILL_ROBOT: Key = k("faults.kill[i].robot", Bounds::Rule("an id below `robots.count`, or `\"leader\"`"), "", "The robot, or the one that last reported itself leader.").ty("integer or \"leader\"");
+    /// `faults.freeze[i].robot`.
+    pub const FREEZE_ROBOT: Key = k("faults.freeze[i].robot", Bounds::Rule("an id below `robots.count`, or `\"leader\"`"), "", "The robot to SIGSTOP.").ty("integer or \"leader\"");
+    /// `faults.freeze[i].from`.
+    pub const FREEZE_FROM: Key = k("faults.freeze[i].from", Bounds::Any, "tick", "First frozen tick.");
+    /// `faults.freeze[i].to`.
+    pub const FREEZE_TO: Key = k("faults.freeze[i].to", Bounds::Rule("after `from`"), "tick", "First tick it answers again (SIGCONT).");
+    /// `faults.restart[i].tick`.
+    pub const RESTART_TICK: Key = k("faults.restart[i].tick", Bounds::Any, "tick", "Tick at which the old process is killed.");
+    /// `faults.restart[i].robot`.
+    pub const RESTART_ROBOT: Key = k("faults.restart[i].robot", Bounds::Rule("an id below `robots.count`, or `\"leader\"`"), "", "The robot to restart with no memory.").ty("integer or \"leader\"");
+    /// `faults.restart[i].down_ticks`.
+    pub const RESTART_DOWN_TICKS: Key = k("faults.restart[i].down_ticks", r(1.0, 1_000_000.0), "ticks", "Ticks offline before the fresh process rejoins.");
+    /// `faults.partition[i].from`.
+    pub const PARTITION_FROM: Key = k("faults.partition[i].from", Bounds::Any, "tick", "First tick of the partition.");
+    /// `faults.partition[i].to`.
+    pub const PARTITION_TO: Key = k("faults.partition[i].to", Bounds::Rule("after `from`"), "tick", "First tick after it.");
+    /// `faults.partition[i].groups`.
+    pub const PARTITION_GROUPS: Key = k("faults.partition[i].groups", Bounds::Rule("disjoint ids below `robots.count`"), "", "Groups that cannot hear each other; robots listed nowhere form one more.");
+    /// `faults.blackout[i].from`.
+    pub const BLACKOUT_FROM: Key = k("faults.blackout[i].from", Bounds::Any, "tick", "First tick with every radio off.");
+    /// `faults.blackout[i].to`.
+    pub const BLACKOUT_TO: Key = k("faults.blackout[i].to", Bounds::Rule("after `from`"), "tick", "First tick after it.");
+
+    /// Every key of `[faults]`, in the order of the reference.
+    pub const KEYS: &[Key] = &[
+        KILL_RATE, FREEZE_RATE, FREEZE_TICKS, KILL_TICK, KILL_ROBOT, FREEZE_ROBOT, FREEZE_FROM,
+        FREEZE_TO, RESTART_TICK, RESTART_ROBOT, RESTART_DOWN_TICKS, PARTITION_FROM, PARTITION_TO,
+        PARTITION_GROUPS, BLACKOUT_FROM, BLACKOUT_TO,
+    ];
+}
+pub use keys::*;
+
 /// `[[faults.partition]]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -174,7 +220,10 @@ impl FaultsConfig {
             r.robot
                 .validate(&format!("faults.restart[{i}].robot"), robots)?;
             let key = format!("faults.restart[{i}].down_ticks");
-            let (lo, hi) = (lo(KEYS, &key) as u64, hi(KEYS, &key) as u64);
+            let (lo, hi) = (
+                RESTART_DOWN_TICKS.lo() as u64,
+                RESTART_DOWN_TICKS.hi() as u64,
+            );
             if !(lo..=hi).contains(&r.down_ticks) {
                 return Err((
                     key,
@@ -182,26 +231,22 @@ impl FaultsConfig {
                 ));
             }
         }
-        for (key, v) in [
-            ("faults.kill_rate", self.kill_rate),
-            ("faults.freeze_rate", self.freeze_rate),
-        ] {
-            if !(lo(KEYS, key)..=hi(KEYS, key)).contains(&v) {
+        for (row, v) in [(KILL_RATE, self.kill_rate), (FREEZE_RATE, self.freeze_rate)] {
+            if !(row.lo()..=row.hi()).contains(&v) {
                 return Err((
-                    key.into(),
+                    row.path.into(),
                     format!(
                         "expected a probability per robot per tick in [{}, {}], got {v}",
-                        lo(KEYS, key),
-                        hi(KEYS, key)
+                        row.lo(),
+                        row.hi()
                     ),
                 ));
             }
         }
-        let key = "faults.freeze_ticks";
-        let (lo, hi) = (lo(KEYS, key) as u64, hi(KEYS, key) as u64);
+        let (lo, hi) = (FREEZE_TICKS.lo() as u64, FREEZE_TICKS.hi() as u64);
         if !(lo..=hi).contains(&self.freeze_ticks) {
             return Err((
-                key.into(),
+                FREEZE_TICKS.path.into(),
                 format!(
                     "expected a value in [{lo}, {hi}], got {}",
                     self.freeze_ticks

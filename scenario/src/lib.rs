@@ -26,6 +26,7 @@
 
 pub mod angle;
 pub mod behaviour;
+pub mod bounds;
 pub mod config;
 pub mod consensus;
 pub mod error;
@@ -37,6 +38,7 @@ pub mod limits;
 pub mod overrides;
 pub mod process;
 pub mod program;
+pub mod programs;
 pub mod reference;
 pub mod rng;
 pub mod safe_fs;

@@ -15,168 +15,21 @@
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
+pub use crate::bounds::{Bounds, Key, Lim, check_f, check_u, concat, find, hi, k, lo, pattern, r};
 use crate::config::{Config, MAX_COORD, MAX_ROBOTS};
 use crate::error::{KeyError, one_line};
 use crate::faults::MAX_RESTARTS;
 use crate::limits::{MAX_CONFIG_BYTES, MAX_OBSTACLES, MAX_PROGRAMS};
-use crate::validate::{range_f, range_u64};
 use swarmrt_protocol::{MAX_LIDAR_RAYS, MAX_OUTBOX};
-
-/// One end of a range: a number, or an expression of other keys the validator computes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Lim {
-    /// A constant.
-    V(f64),
-    /// Depends on other keys, e.g. `"2 * robots.radius"`.
-    Of(&'static str),
-}
-
-/// What a value must be, beyond its type.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Bounds {
-    /// Anything of its type (an enum's names are listed from the schema).
-    Any,
-    /// A finite number.
-    Finite,
-    /// A number in `[lo, hi]`, ends included; for an array, every element.
-    Range(Lim, Lim),
-    /// A rule checked in code, in words.
-    Rule(&'static str),
-}
-
-/// One key of the reference: the dotted path (`[i]` for an element of an array of tables),
-/// its bounds, unit and meaning. Type and default come from the schema.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Key {
-    /// Dotted path, e.g. `robots.lidar.rays` or `map.circles[i].r`.
-    pub path: &'static str,
-    /// What the validator accepts.
-    pub bounds: Bounds,
-    /// A further condition, in words (shown after the bounds).
-    pub also: &'static str,
-    /// SI unit (or `ticks`, `deg`, ...); empty when it has none.
-    pub unit: &'static str,
-    /// One line of meaning.
-    pub meaning: &'static str,
-    /// The type when the schema's example cannot show it (an id or a name, an empty list).
-    pub ty: &'static str,
-    /// The default of a key serde leaves out of the resolved config while it has it (an
-    /// empty list, `false`, an unset option): `"unset"` or the TOML value.
-    pub absent: &'static str,
-}
-
-/// A key with `bounds`, `unit` and `meaning`.
-pub const fn k(
-    path: &'static str,
-    bounds: Bounds,
-    unit: &'static str,
-    meaning: &'static str,
-) -> Key {
-    Key {
-        path,
-        bounds,
-        also: "",
-        unit,
-        meaning,
-        ty: "",
-        absent: "unset",
-    }
-}
-
-/// `[lo, hi]` with constant ends.
-pub const fn r(lo: f64, hi: f64) -> Bounds {
-    Bounds::Range(Lim::V(lo), Lim::V(hi))
-}
-
-impl Key {
-    /// With a further condition.
-    pub const fn also(mut self, also: &'static str) -> Key {
-        self.also = also;
-        self
-    }
-
-    /// With its type spelled out.
-    pub const fn ty(mut self, ty: &'static str) -> Key {
-        self.ty = ty;
-        self
-    }
-
-    /// With the default serde leaves out of the resolved config (a TOML value).
-    pub const fn absent(mut self, value: &'static str) -> Key {
-        self.absent = value;
-        self
-    }
-}
-
-/// `map.circles[3].x` -> `map.circles[i].x`; `map.bounds[2]` -> `map.bounds` (the element of
-/// an array of values has the array's row).
-pub fn pattern(key: &str) -> String {
-    let mut out = String::with_capacity(key.len());
-    let mut chars = key.chars().peekable();
-    while let Some(c) = chars.next() {
-        if c == '[' && chars.peek().is_some_and(char::is_ascii_digit) {
-            while chars.next().is_some_and(|c| c != ']') {}
-            out.push_str("[i]");
-        } else {
-            out.push(c);
-        }
-    }
-    while out.ends_with("[i]") {
-        out.truncate(out.len() - 3);
-    }
-    out
-}
-
-/// The row of `key` (indices allowed) in `table`. Panics when there is none: a validator that
-/// checks a key the reference does not list is a bug the tests catch.
-pub fn find<'a>(table: &'a [Key], key: &str) -> &'a Key {
-    let p = pattern(key);
-    table
-        .iter()
-        .find(|k| k.path == p)
-        .unwrap_or_else(|| panic!("the config reference has no row for `{p}`"))
-}
-
-fn ends(table: &[Key], key: &str) -> (Lim, Lim) {
-    match find(table, key).bounds {
-        Bounds::Range(lo, hi) => (lo, hi),
-        b => panic!("the config reference gives `{key}` no range but {b:?}"),
-    }
-}
-
-/// The constant lower end of `key`'s range.
-pub fn lo(table: &[Key], key: &str) -> f64 {
-    match ends(table, key).0 {
-        Lim::V(v) => v,
-        Lim::Of(e) => panic!("the lower end of `{key}` is {e}, not a constant"),
-    }
-}
-
-/// The constant upper end of `key`'s range.
-pub fn hi(table: &[Key], key: &str) -> f64 {
-    match ends(table, key).1 {
-        Lim::V(v) => v,
-        Lim::Of(e) => panic!("the upper end of `{key}` is {e}, not a constant"),
-    }
-}
-
-/// `v` within the range `table` gives `key` (a number).
-pub fn check_f(table: &[Key], key: &str, v: f64) -> Result<(), KeyError> {
-    range_f(key, v, lo(table, key), hi(table, key))
-}
-
-/// `v` within the range `table` gives `key` (an integer).
-pub fn check_u(table: &[Key], key: &str, v: u64) -> Result<(), KeyError> {
-    range_u64(key, v, lo(table, key) as u64, hi(table, key) as u64)
-}
 
 const C: f64 = MAX_COORD;
 const COORD: Bounds = r(-C, C);
 const TO_CEILING: Bounds = Bounds::Range(Lim::V(0.0), Lim::Of("map.height"));
 
-/// Every key of the config outside `[behaviour]`'s parameters, in the order of the reference.
+/// The keys of the sections that do not own theirs yet (`[scenario]`, `[map]`, `[robots]`,
+/// `[radio]`, `behaviour.kind`), in the order of the reference.
 #[rustfmt::skip]
-pub const KEYS: &[Key] = &[
+const SHARED_KEYS: &[Key] = &[
     // [scenario]
     k("scenario.name", Bounds::Rule("non-empty, at most 64 bytes; letters, digits, `_` or `-`"), "", "Scenario name, used in the run directory name."),
     k("scenario.seed", Bounds::Any, "", "The run seed: every random draw derives from it."),
@@ -257,40 +110,27 @@ pub const KEYS: &[Key] = &[
     k("radio.rounds", r(0.0, 10_000.0), "rounds", "Most in-tick propagation rounds: frames a robot marks travel within the tick and wake their receivers to react before the world steps (0: none). Needs delay_ticks = jitter_ticks = 0 and the built-in robot.").absent("0"),
     // [behaviour]
     k("behaviour.kind", Bounds::Rule("a behaviour below"), "", "The behaviour every robot runs; its parameters are the other `[behaviour]` keys."),
-    // [faults]
-    k("faults.kill_rate", r(0.0, 1.0), "", "Probability per running robot per tick that its process is killed.").absent("0.0"),
-    k("faults.freeze_rate", r(0.0, 1.0), "", "Probability per running robot per tick that it is frozen.").absent("0.0"),
-    k("faults.freeze_ticks", r(1.0, 1_000_000.0), "ticks", "Length of a random freeze."),
-    k("faults.kill[i].tick", Bounds::Any, "tick", "Tick from which the robot is dead."),
-    k("faults.kill[i].robot", Bounds::Rule("an id below `robots.count`, or `\"leader\"`"), "", "The robot, or the one that last reported itself leader.").ty("integer or \"leader\""),
-    k("faults.freeze[i].robot", Bounds::Rule("an id below `robots.count`, or `\"leader\"`"), "", "The robot to SIGSTOP.").ty("integer or \"leader\""),
-    k("faults.freeze[i].from", Bounds::Any, "tick", "First frozen tick."),
-    k("faults.freeze[i].to", Bounds::Rule("after `from`"), "tick", "First tick it answers again (SIGCONT)."),
-    k("faults.restart[i].tick", Bounds::Any, "tick", "Tick at which the old process is killed."),
-    k("faults.restart[i].robot", Bounds::Rule("an id below `robots.count`, or `\"leader\"`"), "", "The robot to restart with no memory.").ty("integer or \"leader\""),
-    k("faults.restart[i].down_ticks", r(1.0, 1_000_000.0), "ticks", "Ticks offline before the fresh process rejoins."),
-    k("faults.partition[i].from", Bounds::Any, "tick", "First tick of the partition."),
-    k("faults.partition[i].to", Bounds::Rule("after `from`"), "tick", "First tick after it."),
-    k("faults.partition[i].groups", Bounds::Rule("disjoint ids below `robots.count`"), "", "Groups that cannot hear each other; robots listed nowhere form one more."),
-    k("faults.blackout[i].from", Bounds::Any, "tick", "First tick with every radio off."),
-    k("faults.blackout[i].to", Bounds::Rule("after `from`"), "tick", "First tick after it."),
-    // [consensus]
-    k("consensus.algorithm", Bounds::Any, "", "Raft election and log, or the quadrant leader choice of seed 001."),
-    k("consensus.election_timeout_min", r(2.0, 100_000.0), "ticks", "Lower end of the randomized election timeout; also the leader lease.").also("above the radio round trip `2 * (1 + delay_ticks + jitter_ticks)`"),
-    k("consensus.election_timeout_max", Bounds::Range(Lim::Of("election_timeout_min + 1"), Lim::V(1_000_000.0)), "ticks", "Upper end (exclusive) of the election timeout."),
-    k("consensus.heartbeat_ticks", Bounds::Range(Lim::V(1.0), Lim::Of("election_timeout_min - 1")), "ticks", "Ticks between leader heartbeats."),
-    k("consensus.pre_vote", Bounds::Any, "", "Pre-vote: a robot back from afar cannot depose a healthy leader."),
-    k("consensus.check_quorum", Bounds::Any, "", "A leader that hears no majority for `election_timeout_max` steps down."),
-    k("consensus.stats_every", r(1.0, 1_000_000.0), "ticks", "Ticks between the message-count notes a robot reports."),
-    k("consensus.storage", Bounds::Any, "", "Raft term, vote and log survive a restart (`storage/raft-<id>.state`); false: amnesia.").absent("true"),
-    k("consensus.quadrant.claim_period", r(1.0, 100_000.0), "ticks", "Ticks between a robot's claims and leader announcements."),
-    k("consensus.quadrant.decide_tick", r(1.0, 100_000_000.0), "tick", "Tick from which a robot decides on the claims heard."),
-    k("consensus.propose[i].tick", r(0.0, 100_000_000.0), "tick", "The leader at this tick (or the first after) proposes it."),
-    k("consensus.propose[i].goal", Bounds::Rule("a point `[x, y]` inside `map.bounds`"), "m", "Set the swarm's goal.").also("exactly one of `goal` and `speed`"),
-    k("consensus.propose[i].speed", Bounds::Range(Lim::V(0.0), Lim::Of("robots.max_speed")), "m/s", "Set the swarm's cruise speed."),
-    // [ipc]
+];
+
+/// `[ipc]`.
+#[rustfmt::skip]
+const IPC_KEYS: &[Key] = &[
     k("ipc.observers", r(0.0, 64.0), "", "Spare subscriber and listener slots per service, for tools attaching to a live run.").absent("2"),
 ];
+
+/// Every table of rows, in the order of the reference: `[faults]` and `[consensus]` own theirs.
+const TABLES: [&[Key]; 4] = [
+    SHARED_KEYS,
+    crate::faults::KEYS,
+    crate::consensus::KEYS,
+    IPC_KEYS,
+];
+
+const ROWS: usize =
+    SHARED_KEYS.len() + crate::faults::KEYS.len() + crate::consensus::KEYS.len() + IPC_KEYS.len();
+
+/// Every key of the config outside `[behaviour]`'s parameters, in the order of the reference.
+pub const KEYS: &[Key] = &concat::<ROWS>(&TABLES);
 
 /// The sections of the config, in the order of the reference, each with a line of meaning.
 pub fn sections() -> Vec<(&'static str, String)> {

@@ -2,6 +2,7 @@
 //! key and what was expected (with the bounds). Behaviours check their own `[behaviour]`
 //! parameters with the same helpers.
 
+pub use crate::bounds::{check, finite, range_f, range_u64, short};
 use crate::config::Config;
 use crate::error::KeyError;
 use crate::hull::hull_shape;
@@ -272,7 +273,12 @@ impl Config {
         self.faults.validate(self.robots.count)?;
 
         if let Some(c) = &self.consensus {
-            c.validate(self)?;
+            c.validate(&crate::consensus::Around {
+                delay_ticks: self.radio.delay_ticks as u64,
+                jitter_ticks: self.radio.jitter_ticks as u64,
+                bounds: self.map.bounds,
+                max_speed: self.robots.max_speed,
+            })?;
         }
 
         Ok(())
@@ -409,49 +415,4 @@ fn polygon_area(key: &str, points: &[[f64; 2]]) -> Result<(), KeyError> {
              convex hull has an area of at least {MIN_POLYGON_AREA:e} m², got {got}"
         ),
     ))
-}
-
-/// `Ok` when `ok`, else an error at `key` saying what was `expected`.
-pub fn check(ok: bool, key: &str, expected: &str) -> Result<(), KeyError> {
-    if ok {
-        Ok(())
-    } else {
-        Err((key.to_string(), format!("expected {expected}")))
-    }
-}
-
-/// `v` must be finite.
-pub fn finite(key: &str, v: f64) -> Result<(), KeyError> {
-    check(
-        v.is_finite(),
-        key,
-        &format!("a finite number, got {}", short(v)),
-    )
-}
-
-/// `v` must be finite and in `[lo, hi]`.
-pub fn range_f(key: &str, v: f64, lo: f64, hi: f64) -> Result<(), KeyError> {
-    check(
-        v.is_finite() && v >= lo && v <= hi,
-        key,
-        &format!("a number in [{lo}, {hi}], got {}", short(v)),
-    )
-}
-
-/// `v` for an error message: `-1e308`, not its 309 digits.
-pub fn short(v: f64) -> String {
-    if v.is_finite() && v != 0.0 && !(1e-6..1e15).contains(&v.abs()) {
-        format!("{v:e}")
-    } else {
-        v.to_string()
-    }
-}
-
-/// `v` must be in `[lo, hi]`.
-pub fn range_u64(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), KeyError> {
-    check(
-        v >= lo && v <= hi,
-        key,
-        &format!("an integer in [{lo}, {hi}], got {v}"),
-    )
 }

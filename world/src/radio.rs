@@ -84,7 +84,7 @@ use crate::rng::{self, Rng};
 
 /// Counters of the medium. Invariant: `sent == delivered + dropped + in_flight`, and `dropped`
 /// is the sum of the `dropped_*` fields.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct RadioStats {
     /// Frames offered by talking robots (outbox entries), before fan-out.
     pub frames: u64,

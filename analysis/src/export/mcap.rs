@@ -53,9 +53,10 @@ use std::path::{Path, PathBuf};
 use ::mcap::records::{MessageHeader, Metadata};
 use ::mcap::{Attachment, Compression, WriteOptions, Writer};
 use anyhow::Context;
+use serde::Deserialize;
 use serde_json::{Value, json};
 use swarmrt_protocol::RobotState;
-use swarmrt_protocol::records::{Columns, Row};
+use swarmrt_protocol::records::{Columns, Event, FaultKind, Row};
 use swarmrt_scenario::Config;
 use swarmrt_scenario::safe_fs::{self, Open, OutDir};
 
@@ -227,7 +228,24 @@ struct EventLine {
     /// 1-based line number in `events.jsonl`.
     line: u64,
     tick: u64,
-    event: Value,
+    event: Logged,
+}
+
+/// An event line as the world writes it ([`Event`]), or one this build does not read as
+/// such (another kind, a field missing), which is logged as the JSON it is.
+#[derive(Debug, Clone, PartialEq)]
+enum Logged {
+    Known(Event<Value>),
+    Other(Value),
+}
+
+impl Logged {
+    fn of(v: Value) -> Logged {
+        match Event::<Value>::deserialize(&v) {
+            Ok(e) => Logged::Known(e),
+            Err(_) => Logged::Other(v),
+        }
+    }
 }
 
 /// What the export reads from a run directory.
@@ -373,7 +391,7 @@ fn parse_events(text: &str, warnings: &mut Vec<String>) -> Vec<EventLine> {
             Some(tick) => out.push(EventLine {
                 line: i as u64 + 1,
                 tick,
-                event: parsed.expect("parsed above"),
+                event: Logged::of(parsed.expect("parsed above")),
             }),
             None => bad += 1,
         }
@@ -783,44 +801,12 @@ fn frame_transforms(rows: &[Row], time_ns: u64) -> Value {
 /// for notes (a robot's chatter, often many), info for the rest; `name` is `robot_<id>` for a
 /// robot's event, else `world`; `file`/`line` point into `events.jsonl`.
 fn log_message(e: &EventLine, time_ns: u64) -> Value {
-    let ev = &e.event;
-    let kind = ev["event"].as_str().unwrap_or("event");
-    let robot = ev.get("robot").and_then(Value::as_u64);
-    let who = robot.map_or("the world".to_string(), |r| format!("robot {r}"));
-    let text = |key: &str| {
-        ev.get(key)
-            .and_then(Value::as_str)
-            .unwrap_or("")
-            .to_string()
-    };
-    let (level, message) = match kind {
-        "collision" => (
-            LOG_WARNING,
-            match ev.get("other").and_then(Value::as_u64) {
-                Some(o) => format!("collision: {who} hit robot {o}"),
-                None => format!("collision: {who} hit an obstacle or a wall"),
-            },
-        ),
-        "reached" => (LOG_INFO, format!("reached: {who} reached its goal")),
-        "died" => (LOG_WARNING, format!("died: {who}: {}", text("reason"))),
-        "rejected" => (
-            LOG_WARNING,
-            format!("rejected: {who}'s command: {}", text("reason")),
-        ),
-        "fault" => {
-            let random = if ev["random"] == true {
-                " (random)"
-            } else {
-                ""
-            };
-            let target = robot.map_or(String::new(), |r| format!(" robot {r}"));
-            (
-                LOG_INFO,
-                format!("fault: {}{target}{random}", text("fault")),
-            )
+    let (robot, level, message) = match &e.event {
+        Logged::Known(ev) => {
+            let (robot, level, message) = known_log(ev);
+            (robot.map(u64::from), level, message)
         }
-        "note" => (LOG_DEBUG, format!("note: {who}: {}", ev["note"])),
-        _ => (LOG_INFO, format!("{kind}: {ev}")),
+        Logged::Other(ev) => other_log(ev),
     };
     json!({
         "timestamp": time_json(time_ns),
@@ -830,6 +816,67 @@ fn log_message(e: &EventLine, time_ns: u64) -> Value {
         "file": "events.jsonl",
         "line": e.line,
     })
+}
+
+/// The robot, level and message of an event the world writes.
+fn known_log(ev: &Event<Value>) -> (Option<u32>, u8, String) {
+    match ev {
+        Event::Collision { robot, other, .. } => (
+            Some(*robot),
+            LOG_WARNING,
+            match other {
+                Some(o) => format!("collision: robot {robot} hit robot {o}"),
+                None => format!("collision: robot {robot} hit an obstacle or a wall"),
+            },
+        ),
+        Event::Reached { robot, .. } => (
+            Some(*robot),
+            LOG_INFO,
+            format!("reached: robot {robot} reached its goal"),
+        ),
+        Event::Died { robot, reason, .. } => (
+            Some(*robot),
+            LOG_WARNING,
+            format!("died: robot {robot}: {reason}"),
+        ),
+        Event::Rejected { robot, reason, .. } => (
+            Some(*robot),
+            LOG_WARNING,
+            format!("rejected: robot {robot}'s command: {reason}"),
+        ),
+        Event::Fault {
+            fault,
+            robot,
+            random,
+            ..
+        } => {
+            let random = if *random { " (random)" } else { "" };
+            let target = robot.map_or(String::new(), |r| format!(" robot {r}"));
+            let name = fault_name(*fault);
+            (*robot, LOG_INFO, format!("fault: {name}{target}{random}"))
+        }
+        Event::Note { robot, note, .. } => (
+            Some(*robot),
+            LOG_DEBUG,
+            format!("note: robot {robot}: {note}"),
+        ),
+    }
+}
+
+/// The name of `fault` in `events.jsonl` (its serde name, so never spelled twice).
+fn fault_name(fault: FaultKind) -> String {
+    match serde_json::to_value(fault) {
+        Ok(Value::String(name)) => name,
+        _ => String::new(),
+    }
+}
+
+/// An event line this build does not read as an [`Event`]: logged at info as its kind and
+/// its JSON, named for its `robot` when it has one.
+fn other_log(ev: &Value) -> (Option<u64>, u8, String) {
+    let kind = ev["event"].as_str().unwrap_or("event");
+    let robot = ev.get("robot").and_then(Value::as_u64);
+    (robot, LOG_INFO, format!("{kind}: {ev}"))
 }
 
 #[cfg(test)]

@@ -25,7 +25,7 @@ use swarmrt_scenario::Config;
 use swarmrt_world::Event;
 use swarmrt_world::radio::RadioMedium;
 
-use swarmrt_analysis::consensus_check::Checker;
+use crate::consensus_check::Checker;
 
 /// A minimal scenario the harnesses adjust (robot count, radio, consensus).
 pub fn base_config() -> Config {

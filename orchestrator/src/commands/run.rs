@@ -4,12 +4,15 @@ use std::io::IsTerminal;
 use std::time::Instant;
 use swarmrt_scenario::safe_fs::OutDir;
 
+use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use serde_json::json;
 
 use crate::cli::RunArgs;
 use crate::config::load_config;
 use crate::error::{SwarmError, SwarmResult};
+use crate::metrics::{
+    Ended, Link, Metrics, Mode, ProcessSection, RunHeader, UnscheduledDeath, WorldSection,
+};
 use crate::{processes, run_dir};
 
 fn progress_bar(total: u64) -> ProgressBar {
@@ -54,36 +57,14 @@ fn run_with(
     interrupt: crossbeam_channel::Receiver<()>,
     viewer: &mut Option<swarmrt_viewer::Viewer>,
 ) -> SwarmResult<std::path::PathBuf> {
-    let mut set = args.set.clone();
-    if let Some(seed) = args.seed {
-        set.push(format!("scenario.seed={seed}"));
-    }
-    if let Some(ticks) = args.ticks {
-        set.push(format!("scenario.ticks={ticks}"));
-    }
-    let cfg = load_config(&args.config, &set)?;
+    let cfg = resolve(args)?;
     // The page's port first: a port in use is refused before the run writes anything.
     let socket = if args.view {
         Some(super::view::bind(&args.serve)?)
     } else {
         None
     };
-    if args.in_process {
-        crate::config::refuse_foreign_in_process(&cfg, &args.config, "--in-process")?;
-    }
-    if cfg.radio.rounds > 0 && (args.realtime || args.hosts.is_some()) {
-        let flag = if args.realtime {
-            "--realtime"
-        } else {
-            "--hosts"
-        };
-        return Err(SwarmError::User(format!(
-            "{}: key `radio.rounds`: expected 0 with {flag}, got {}: propagation rounds need \
-             every robot's answer within the tick on this host (drop {flag}, or set radio.rounds = 0)",
-            args.config.display(),
-            cfg.radio.rounds
-        )));
-    }
+    refuse_combinations(args, &cfg)?;
     // The directory is locked for the whole run (`_lock` lives until this returns): a second
     // run into it is refused, and so is an earlier run's directory unless --force.
     // Checked once here (no other user owns it, may write it, or could swap a directory on
@@ -100,185 +81,250 @@ fn run_with(
             (out, lock)
         }
     };
-    let dir = out.path().to_path_buf();
-    let hosts = match &args.hosts {
-        Some(path) => {
-            let file = swarmrt_hosts::HostsFile::load(path, cfg.robots.count)?;
-            if !file.is_secure() && !args.insecure_link {
-                return Err(SwarmError::User(file.insecure_refusal(path)));
-            }
-            Some(file)
-        }
-        None => None,
-    };
+    let hosts = load_hosts(args, &cfg)?;
     let config_path = run_dir::prepare(&out, &cfg)?;
-    let hosts = match (hosts, &args.hosts) {
-        (Some(file), Some(path)) => {
-            // The world reads it from the run directory, which also keeps it with the records.
-            let copy = dir.join("hosts.toml");
-            // Never through a link planted at the copy's name.
-            std::fs::read(path)
-                .and_then(|text| out.write("hosts.toml", text))
-                .map_err(|e| {
-                    SwarmError::Internal(anyhow::anyhow!("cannot copy {}: {e}", path.display()))
-                })?;
-            Some(crate::hosts::RunHosts { file, path: copy })
-        }
-        _ => None,
-    };
+    let hosts = copy_hosts(args, &out, hosts)?;
     run_dir::reserve_metrics_room(&out, cfg.robots.count);
     if let Some(socket) = socket {
         // Reads the records as the run writes them: attaching it changes no record byte.
-        let v = super::view::start(&dir, socket)?;
+        let v = super::view::start(out.path(), socket)?;
         eprintln!("watch the run at {}", v.url());
         *viewer = Some(v);
     }
     let pb = progress_bar(cfg.scenario.ticks);
     let started = Instant::now();
-    let mut metrics = json!({
-        "scenario": cfg.scenario.name,
-        "seed": cfg.scenario.seed,
-        "mode": if args.in_process {
-            "in-process"
-        } else if args.realtime {
-            "realtime"
-        } else {
-            "processes"
-        },
-        "agents": cfg.robots.count,
-    });
-
-    let failure: Option<String>;
-    if args.in_process {
-        let (world, interrupted) = match swarmrt_harness::lockstep::run_recorded(
-            &cfg,
-            &out,
-            || interrupt.try_recv().is_ok(),
-            |t| pb.set_position(t),
-        ) {
-            Ok(r) => r,
-            // A write failed (e.g. the disk is full): the records stop mid-tick.
-            Err(e) => {
-                pb.finish_and_clear();
-                let e = anyhow::Error::from(e).context("run failed writing its records");
-                return Err(failed_early(&out, &cfg, metrics, started, e));
-            }
-        };
-        merge(
-            &mut metrics,
-            serde_json::to_value(world).map_err(anyhow::Error::from)?,
-        );
-        metrics["interrupted"] = json!(interrupted);
-        metrics["reproducible"] = json!(!interrupted);
-        failure = None;
+    let header = RunHeader {
+        scenario: cfg.scenario.name.clone(),
+        seed: cfg.scenario.seed,
+        mode: mode(args),
+        agents: cfg.robots.count,
+    };
+    let ran = if args.in_process {
+        run_in_process(&cfg, &out, &interrupt, &pb)
     } else {
         let opts = processes::RunOptions {
             hosts: hosts.as_ref(),
             insecure_link: args.insecure_link,
             realtime: args.realtime,
         };
-        let done = match processes::run_on_hosts(&cfg, &config_path, &out, &opts, interrupt, |t| {
-            pb.set_position(t)
-        }) {
-            Ok(done) => done,
-            Err(e) => {
-                pb.finish_and_clear();
-                // A bad or unreachable host is the user's to fix: one line, exit 2.
-                // So is a shared-memory base that swarm refuses to use.
-                let user_line = e
-                    .downcast_ref::<crate::hosts::HostFailure>()
-                    .map(|h| h.to_string())
-                    .or_else(|| {
-                        e.downcast_ref::<swarmrt_ipc::cleanup::BaseRefused>()
-                            .map(|r| r.to_string())
-                    });
-                if let Some(line) = user_line {
-                    let _ = failed_early(&out, &cfg, metrics, started, e);
-                    return Err(SwarmError::User(line));
-                }
-                return Err(failed_early(&out, &cfg, metrics, started, e));
-            }
-        };
-        if let Some(w) = done.world_metrics {
-            merge(&mut metrics, w);
-        }
-        metrics["run_id"] = json!(done.run_id);
-        metrics["interrupted"] = json!(done.interrupted);
-        metrics["startup_ms"] = json!(done.startup_ms);
-        metrics["processes"] = json!(done.processes);
-        if let Some(h) = &done.hosts {
-            metrics["hosts"] = h.clone();
-            // What the link between hosts trusted (docs/security.md).
-            metrics["link"] = serde_json::json!(if args.insecure_link {
-                "tcp (insecure)"
-            } else {
-                "mutual tls"
-            });
-        }
-        metrics["unscheduled_deaths"] = json!(
-            done.unscheduled_deaths
-                .iter()
-                .map(|(id, how)| json!({"robot": id, "how": how}))
-                .collect::<Vec<_>>()
-        );
-        // An unscheduled death happens at a wall-clock moment: the run cannot be replayed.
-        // A real-time run applies whatever arrived by the wall clock: never replayable.
-        metrics["reproducible"] = json!(
-            done.unscheduled_deaths.is_empty()
-                && done.world_failure.is_none()
-                && !done.interrupted
-                && !args.realtime
-        );
-        failure = done.world_failure;
-    }
+        run_processes(&cfg, &config_path, &out, &opts, interrupt, &pb)
+    };
     pb.finish_and_clear();
-    let wall = started.elapsed().as_secs_f64();
-    metrics["wall_seconds"] = json!(wall);
-    let ticks = metrics["ticks"].as_u64().unwrap_or(0);
-    metrics["ticks_per_second"] = json!(if wall > 0.0 { ticks as f64 / wall } else { 0.0 });
-    metrics["failed"] = json!(failure.is_some());
-    if let Some(f) = &failure {
-        metrics["failure"] = json!(f);
-        if let Some(last) = trimmed_ticks(&out, &cfg) {
-            metrics["ticks"] = json!(last);
+    match ran {
+        Ok(ran) => finish(&cfg, &out, header, ran, started),
+        Err(e) => {
+            // A bad or unreachable host is the user's to fix: one line, exit 2.
+            // So is a shared-memory base that swarm refuses to use.
+            let user_line = user_line(&e);
+            let failed = failed_early(&out, &cfg, header, started, e);
+            Err(user_line.map_or(failed, SwarmError::User))
         }
     }
-    // Robots whose process is gone, by the schedule or by a crash.
-    metrics["robots_lost"] = metrics.get("dead").cloned().unwrap_or(json!(0));
-    match swarmrt_analysis::metrics::from_records(&cfg, &dir) {
-        Ok(m) => merge(&mut metrics, m),
-        Err(e) => tracing::warn!("could not compute metrics from the records: {e:#}"),
+}
+
+/// The config with `--seed`, `--ticks` and `--set` applied.
+fn resolve(args: &RunArgs) -> SwarmResult<swarmrt_scenario::Config> {
+    let mut set = args.set.clone();
+    if let Some(seed) = args.seed {
+        set.push(format!("scenario.seed={seed}"));
     }
-    if cfg.consensus.is_some() {
-        // From the record alone, so both modes give the same numbers.
-        let events = std::fs::read_to_string(dir.join("events.jsonl")).unwrap_or_default();
-        metrics["consensus"] = swarmrt_analysis::consensus_check::consensus_metrics(&events);
+    if let Some(ticks) = args.ticks {
+        set.push(format!("scenario.ticks={ticks}"));
     }
-    if let Err(e) = run_dir::write_metrics(&out, &metrics) {
+    load_config(&args.config, &set)
+}
+
+/// What `--in-process`, `--realtime`, `--hosts` and the config cannot do together.
+fn refuse_combinations(args: &RunArgs, cfg: &swarmrt_scenario::Config) -> SwarmResult<()> {
+    if args.in_process {
+        crate::config::refuse_foreign_in_process(cfg, &args.config, "--in-process")?;
+    }
+    if cfg.radio.rounds > 0 && (args.realtime || args.hosts.is_some()) {
+        let flag = if args.realtime {
+            "--realtime"
+        } else {
+            "--hosts"
+        };
+        return Err(SwarmError::User(format!(
+            "{}: key `radio.rounds`: expected 0 with {flag}, got {}: propagation rounds need \
+             every robot's answer within the tick on this host (drop {flag}, or set radio.rounds = 0)",
+            args.config.display(),
+            cfg.radio.rounds
+        )));
+    }
+    Ok(())
+}
+
+/// The `--hosts` file, checked (an insecure link must be asked for).
+fn load_hosts(
+    args: &RunArgs,
+    cfg: &swarmrt_scenario::Config,
+) -> SwarmResult<Option<swarmrt_hosts::HostsFile>> {
+    let Some(path) = &args.hosts else {
+        return Ok(None);
+    };
+    let file = swarmrt_hosts::HostsFile::load(path, cfg.robots.count)?;
+    if !file.is_secure() && !args.insecure_link {
+        return Err(SwarmError::User(file.insecure_refusal(path)));
+    }
+    Ok(Some(file))
+}
+
+/// Copies the hosts file into the run directory: the world reads it from there, which also
+/// keeps it with the records.
+fn copy_hosts(
+    args: &RunArgs,
+    out: &OutDir,
+    hosts: Option<swarmrt_hosts::HostsFile>,
+) -> SwarmResult<Option<crate::hosts::RunHosts>> {
+    let (Some(file), Some(path)) = (hosts, &args.hosts) else {
+        return Ok(None);
+    };
+    // Never through a link planted at the copy's name.
+    std::fs::read(path)
+        .and_then(|text| out.write("hosts.toml", text))
+        .map_err(|e| {
+            SwarmError::Internal(anyhow::anyhow!("cannot copy {}: {e}", path.display()))
+        })?;
+    let copy = out.path().join("hosts.toml");
+    Ok(Some(crate::hosts::RunHosts { file, path: copy }))
+}
+
+fn mode(args: &RunArgs) -> Mode {
+    if args.in_process {
+        Mode::InProcess
+    } else if args.realtime {
+        Mode::Realtime
+    } else {
+        Mode::Processes
+    }
+}
+
+/// What a run that ended (or was stopped) left for its metrics.
+struct Ran {
+    world: Option<WorldSection>,
+    interrupted: bool,
+    reproducible: bool,
+    processes: Option<ProcessSection>,
+    /// Why the world failed, when it did (the run ended without its final report).
+    failure: Option<String>,
+}
+
+/// World and robots in this process.
+fn run_in_process(
+    cfg: &swarmrt_scenario::Config,
+    out: &OutDir,
+    interrupt: &crossbeam_channel::Receiver<()>,
+    pb: &ProgressBar,
+) -> anyhow::Result<Ran> {
+    let (world, interrupted) = swarmrt_harness::lockstep::run_recorded(
+        cfg,
+        out,
+        || interrupt.try_recv().is_ok(),
+        |t| pb.set_position(t),
+    )
+    // A write failed (e.g. the disk is full): the records stop mid-tick.
+    .map_err(|e| anyhow::Error::from(e).context("run failed writing its records"))?;
+    Ok(Ran {
+        world: Some(WorldSection {
+            metrics: world,
+            shell: None,
+        }),
+        interrupted,
+        reproducible: !interrupted,
+        processes: None,
+        failure: None,
+    })
+}
+
+/// A world process and one process per robot, on this host and the hosts of `opts`.
+fn run_processes(
+    cfg: &swarmrt_scenario::Config,
+    config_path: &std::path::Path,
+    out: &OutDir,
+    opts: &processes::RunOptions,
+    interrupt: crossbeam_channel::Receiver<()>,
+    pb: &ProgressBar,
+) -> anyhow::Result<Ran> {
+    let done = processes::run_on_hosts(cfg, config_path, out, opts, interrupt, |t| {
+        pb.set_position(t)
+    })?;
+    let world = match done.world_metrics {
+        Some(report) => Some(
+            serde_json::from_value::<WorldSection>(report)
+                .context("the world's final report does not read as its metrics")?,
+        ),
+        None => None,
+    };
+    // An unscheduled death happens at a wall-clock moment: the run cannot be replayed.
+    // A real-time run applies whatever arrived by the wall clock: never replayable.
+    let reproducible = done.unscheduled_deaths.is_empty()
+        && done.world_failure.is_none()
+        && !done.interrupted
+        && !opts.realtime;
+    let link = done.hosts.as_ref().map(|_| match opts.insecure_link {
+        true => Link::InsecureTcp,
+        false => Link::MutualTls,
+    });
+    let unscheduled_deaths = (done.unscheduled_deaths.into_iter())
+        .map(|(robot, how)| UnscheduledDeath { robot, how })
+        .collect();
+    Ok(Ran {
+        world,
+        interrupted: done.interrupted,
+        reproducible,
+        processes: Some(ProcessSection {
+            run_id: done.run_id,
+            startup_ms: done.startup_ms,
+            processes: done.processes,
+            unscheduled_deaths,
+            hosts: done.hosts,
+            link,
+        }),
+        failure: done.world_failure,
+    })
+}
+
+/// The one line for the user when `e` is theirs to fix (a bad or unreachable host, a
+/// shared-memory base swarm refuses).
+fn user_line(e: &anyhow::Error) -> Option<String> {
+    e.downcast_ref::<crate::hosts::HostFailure>()
+        .map(|h| h.to_string())
+        .or_else(|| {
+            e.downcast_ref::<swarmrt_ipc::cleanup::BaseRefused>()
+                .map(|r| r.to_string())
+        })
+}
+
+/// After a run that ended: its metrics (world, records, consensus) written once, the
+/// plots and the behaviour's tables, the run directory on stdout.
+fn finish(
+    cfg: &swarmrt_scenario::Config,
+    out: &OutDir,
+    header: RunHeader,
+    ran: Ran,
+    started: Instant,
+) -> SwarmResult<std::path::PathBuf> {
+    let dir = out.path().to_path_buf();
+    let failure = ran.failure.clone();
+    let metrics = ended_metrics(cfg, out, header, ran, started);
+    if let Err(e) = write_metrics(out, &metrics) {
         if failure.is_none() {
             return Err(e.into());
         }
         // A failed run (e.g. a full disk) still reports its failure below.
         tracing::warn!("{e:#}");
     }
-    if let Err(e) = run_dir::write_plots(&out, &cfg) {
+    if let Err(e) = run_dir::write_plots(out, cfg) {
         // Each plot is written whole or not at all (a temporary file renamed into place).
         tracing::warn!("could not draw the trajectory plot: {e:#}");
     }
-    match swarmrt_analysis::series::write_all(&cfg, &out) {
-        // Named in the mark, so a later --force knows them as swarm's.
-        Ok(written) if !written.is_empty() => {
-            if let Err(e) = run_dir::note_written(&out, &written) {
-                tracing::warn!("could not note the behaviour's tables in the mark: {e}");
-            }
-        }
-        Ok(_) => {}
-        Err(e) => tracing::warn!("could not write the behaviour's per-tick tables: {e:#}"),
-    }
+    write_series(cfg, out);
     // A stalled run ended early with robots short of their goal: say so, not only in the file.
     if let Some(stalled) = metrics
-        .get("stalled")
-        .and_then(|v| serde_json::from_value::<swarmrt_world::Stalled>(v.clone()).ok())
+        .world
+        .as_ref()
+        .and_then(|w| w.metrics.stalled.as_ref())
     {
         eprintln!("swarm: {}", stalled.line());
     }
@@ -292,21 +338,75 @@ fn run_with(
     Ok(dir)
 }
 
+/// The metrics of a run that ended: what it ran, then (records trimmed to their last whole
+/// tick if it failed) what its records say.
+fn ended_metrics(
+    cfg: &swarmrt_scenario::Config,
+    out: &OutDir,
+    header: RunHeader,
+    ran: Ran,
+    started: Instant,
+) -> Metrics {
+    let wall = started.elapsed().as_secs_f64();
+    let ticks = ran.world.as_ref().map_or(0, |w| w.metrics.ticks);
+    let ended = Ended {
+        interrupted: ran.interrupted,
+        reproducible: ran.reproducible,
+        ticks_per_second: if wall > 0.0 { ticks as f64 / wall } else { 0.0 },
+        robots_lost: ran.world.as_ref().map_or(0, |w| w.metrics.dead),
+        processes: ran.processes,
+        records: None,
+        consensus: None,
+    };
+    let mut metrics = Metrics::ended(header, ran.world, ended, wall);
+    if let Some(f) = ran.failure {
+        metrics.failed = true;
+        metrics.failure = Some(f);
+        if let Some(last) = trimmed_ticks(out, cfg) {
+            metrics.set_ticks(last);
+        }
+    }
+    let ended = metrics.ended.as_mut().expect("an ended run");
+    match swarmrt_analysis::metrics::from_records(cfg, out.path()) {
+        Ok(m) => ended.records = Some(m),
+        Err(e) => tracing::warn!("could not compute metrics from the records: {e:#}"),
+    }
+    if cfg.consensus.is_some() {
+        // From the record alone, so both modes give the same numbers.
+        let events = std::fs::read_to_string(out.join("events.jsonl")).unwrap_or_default();
+        ended.consensus = Some(swarmrt_harness::consensus_check::consensus_metrics(&events));
+    }
+    metrics
+}
+
+/// The behaviour's per-tick tables and their plots, named in the mark so a later --force
+/// knows them as swarm's.
+fn write_series(cfg: &swarmrt_scenario::Config, out: &OutDir) {
+    match swarmrt_analysis::series::write_all(cfg, out) {
+        Ok(written) if !written.is_empty() => {
+            if let Err(e) = run_dir::note_written(out, &written) {
+                tracing::warn!("could not note the behaviour's tables in the mark: {e}");
+            }
+        }
+        Ok(_) => {}
+        Err(e) => tracing::warn!("could not write the behaviour's per-tick tables: {e:#}"),
+    }
+}
+
 /// A run that ended without the world's final report (the supervisor failed, or an
 /// in-process write failed): trims whatever records it left to the last whole tick, and
 /// leaves a `metrics.json` saying why when there is room for one.
 fn failed_early(
     dir: &OutDir,
     cfg: &swarmrt_scenario::Config,
-    mut metrics: serde_json::Value,
+    header: RunHeader,
     started: Instant,
     e: anyhow::Error,
 ) -> SwarmError {
-    metrics["failed"] = json!(true);
-    metrics["failure"] = json!(format!("{e:#}"));
-    metrics["ticks"] = json!(trimmed_ticks(dir, cfg).unwrap_or(0));
-    metrics["wall_seconds"] = json!(started.elapsed().as_secs_f64());
-    if let Err(w) = run_dir::write_metrics(dir, &metrics) {
+    let ticks = trimmed_ticks(dir, cfg).unwrap_or(0);
+    let wall = started.elapsed().as_secs_f64();
+    let metrics = Metrics::failed_early(header, format!("{e:#}"), ticks, wall);
+    if let Err(w) = write_metrics(dir, &metrics) {
         tracing::warn!("{w:#}");
     }
     println!("{}", dir.path().display());
@@ -314,6 +414,11 @@ fn failed_early(
         "{e:#}; records up to the last whole tick are in {}",
         dir.path().display()
     ))
+}
+
+/// Writes `metrics.json` (atomically, into the room set aside for it).
+fn write_metrics(out: &OutDir, metrics: &Metrics) -> anyhow::Result<()> {
+    run_dir::write_metrics(out, metrics.to_json()?)
 }
 
 /// Cuts the records back to their last whole tick and returns it (0 without a whole tick,
@@ -325,14 +430,6 @@ fn trimmed_ticks(dir: &OutDir, cfg: &swarmrt_scenario::Config) -> Option<u64> {
         Err(e) => {
             tracing::warn!("could not trim the records: {e:#}");
             None
-        }
-    }
-}
-
-fn merge(into: &mut serde_json::Value, from: serde_json::Value) {
-    if let (Some(a), serde_json::Value::Object(b)) = (into.as_object_mut(), from) {
-        for (k, v) in b {
-            a.insert(k, v);
         }
     }
 }

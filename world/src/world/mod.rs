@@ -21,7 +21,7 @@
 //! `sensing.rs` also builds the observations ([`World::observe`]); `stage_times.rs` adds up
 //! the wall-clock time of each stage when the shell asks for it.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
 use swarmrt_protocol::records;
 use swarmrt_protocol::{Command, NoteJson, RobotState, Vocabulary};
@@ -82,8 +82,8 @@ pub struct Robot {
 /// them (the schema is [`swarmrt_protocol::records::Event`]).
 pub type Event = records::Event<NoteJson>;
 
-/// Scalar outcome of a run so far.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+/// Scalar outcome of a run so far (read back from a world process's report, too).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct WorldMetrics {
     /// Ticks stepped.
     pub ticks: u64,

@@ -18,7 +18,7 @@
 //! to `radio.csv`.
 
 use rand::Rng as _;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use swarmrt_protocol::{BROADCAST, Command, CommandKind, Frame, MAX_INBOX, RobotState, RoundInbox};
 
 use super::{Event, World};
@@ -27,7 +27,7 @@ use crate::rng::{self, Rng};
 /// What the propagation rounds did over the run (`metrics.json` `rounds`, present only with
 /// `radio.rounds` > 0). Every round copy is accounted for: `sent == delivered + dropped +
 /// capped`.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct RoundStats {
     /// `radio.rounds`: the most rounds one tick may run.
     pub cap: u32,

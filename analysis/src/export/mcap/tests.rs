@@ -403,7 +403,7 @@ fn the_schema_check_refuses_missing_extra_and_mistyped_fields() {
         &EventLine {
             line: 1,
             tick: 2,
-            event: serde_json::json!({"event": "reached", "tick": 2, "robot": 4}),
+            event: Logged::of(serde_json::json!({"event": "reached", "tick": 2, "robot": 4})),
         },
         7,
     );

@@ -23,8 +23,14 @@
 
 use std::collections::BTreeMap;
 
+mod metrics;
+pub use metrics::{
+    Belief, ConsensusMetrics, ConsensusReport, DecisionRow, Leader, QuadrantMetrics,
+    consensus_metrics,
+};
+
 use serde::de::IgnoredAny;
-use serde_json::{Value, json};
+use serde_json::Value;
 use swarmrt_agent::consensus::{ConsensusNote, Decision, RecordedNote, Role, SentCounts};
 use swarmrt_protocol::records::{Event, FaultKind};
 
@@ -607,76 +613,6 @@ impl Checker {
         }
         Ok(c)
     }
-
-    /// The consensus metrics (see [`consensus_metrics`]).
-    pub fn metrics(&self) -> Value {
-        let mut sent = SentCounts::default();
-        for v in self.robots.values() {
-            add_counts(&mut sent, &v.sent_before);
-            add_counts(&mut sent, &v.sent);
-        }
-        let sent: serde_json::Map<String, Value> = sent
-            .pairs()
-            .into_iter()
-            .filter(|&(_, n)| n > 0)
-            .map(|(k, n)| (k.to_string(), json!(n)))
-            .collect();
-        let decisions: Vec<Value> = self
-            .proposals
-            .iter()
-            .map(|(&(index, term), p)| {
-                let committed = self
-                    .committed
-                    .get(index as usize - 1)
-                    .is_some_and(|&(t, _)| t == term);
-                json!({
-                    "id": p.id,
-                    "decision": p.decision,
-                    "index": index,
-                    "term": term,
-                    "proposed_tick": p.tick,
-                    "proposer": p.robot,
-                    "committed_tick": if committed { json!(self.committed_tick[index as usize - 1]) } else { Value::Null },
-                    "applied_by": if committed { self.applied_by.get(&index).map_or(0, |s| s.len()) } else { 0 },
-                })
-            })
-            .collect();
-        let terms = self.robots.values().map(|v| v.term).max().unwrap_or(0);
-        let mut m = json!({
-            "first_leader_tick": self.first_leader_tick,
-            "leader": self.current_leader.map(|(r, t)| json!({"robot": r, "term": t})),
-            "leader_changes": self.leader_changes,
-            "reelection_ticks": self.reelection_ticks,
-            "terms": terms,
-            "committed": self.committed.len(),
-            "applied_min_live": self.robots.values().filter(|v| v.alive).map(|v| v.applied).min(),
-            "decisions": decisions,
-            "safety_violations": self.violations.len(),
-            "violations": self.violations.iter().take(10).map(|v| v.to_string()).collect::<Vec<_>>(),
-            "amnesia_restarts": self.amnesia,
-            "sent": sent,
-            "notes": self.notes,
-        });
-        let beliefs: BTreeMap<u32, (u32, u8)> = self
-            .robots
-            .iter()
-            .filter_map(|(&r, v)| v.quadrant.map(|q| (r, q)))
-            .collect();
-        if !beliefs.is_empty() {
-            let leaders: Vec<u32> = beliefs
-                .iter()
-                .filter(|&(&r, &(l, _))| r == l)
-                .map(|(&r, _)| r)
-                .collect();
-            let first = beliefs.values().next().map(|b| b.0);
-            m["quadrant"] = json!({
-                "self_declared_leaders": leaders,
-                "all_agree": beliefs.values().all(|b| Some(b.0) == first),
-                "beliefs": beliefs.iter().map(|(&r, &(l, s))| json!({"robot": r, "leader": l, "score": s})).collect::<Vec<_>>(),
-            });
-        }
-        m
-    }
 }
 
 fn add_counts(into: &mut SentCounts, c: &SentCounts) {
@@ -688,21 +624,6 @@ fn add_counts(into: &mut SentCounts, c: &SentCounts) {
     into.append_resp += c.append_resp;
     into.quad_claim += c.quad_claim;
     into.quad_leader += c.quad_leader;
-}
-
-/// The consensus metrics of a run from its `events.jsonl` text: `first_leader_tick`,
-/// `leader_changes`, `reelection_ticks` (from a leader's death or disappearance to the next
-/// leader), `terms` (highest term), `committed` (length of the committed log),
-/// `applied_min_live`, `decisions` (each proposal: when proposed, committed, by how many
-/// robots applied), `safety_violations` (must be 0) with the first few `violations`,
-/// `amnesia_restarts`, `sent` (consensus frames per kind, from the robots' cumulative `sent`
-/// notes; a robot's last `stats_every` ticks before the end or its death are not counted)
-/// and, for the quadrant leader choice, `quadrant`.
-pub fn consensus_metrics(events: &str) -> Value {
-    match Checker::from_events(events) {
-        Ok(c) => c.metrics(),
-        Err(e) => json!({ "error": e }),
-    }
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 
 use super::*;
 use ConsensusNote as N;
+use serde_json::json;
 
 fn state(term: u64, role: Role, vote: Option<u32>) -> N {
     N::State { term, role, vote }
@@ -296,13 +297,16 @@ fn metrics_follow_leaders_deaths_and_reelections() {
     push(&mut lines, 12, 1, app(1, 1, 0xa));
     push(&mut lines, 50, 1, state(2, Role::Candidate, Some(1)));
     push(&mut lines, 71, 1, state(2, Role::Leader, Some(1)));
-    let m = consensus_metrics(&lines);
-    assert_eq!(m["first_leader_tick"], 10);
-    assert_eq!(m["leader_changes"], 1);
-    assert_eq!(m["reelection_ticks"], json!([21]));
-    assert_eq!(m["terms"], 2);
-    assert_eq!(m["committed"], 1);
-    assert_eq!(m["safety_violations"], 0);
-    assert_eq!(m["sent"]["append"], 4);
-    assert!(consensus_metrics("not json\n")["error"].is_string());
+    let ConsensusReport::Checked(m) = consensus_metrics(&lines) else {
+        panic!("the notes read");
+    };
+    assert_eq!(m.first_leader_tick, Some(10));
+    assert_eq!(m.leader_changes, 1);
+    assert_eq!(m.reelection_ticks, [21]);
+    assert_eq!(m.terms, 2);
+    assert_eq!(m.committed, 1);
+    assert_eq!(m.safety_violations, 0);
+    assert_eq!(m.sent.get("append"), Some(&4));
+    let unreadable = serde_json::to_value(consensus_metrics("not json\n")).unwrap();
+    assert!(unreadable["error"].is_string(), "{unreadable}");
 }
