@@ -119,7 +119,10 @@ fn the_fast_lane_builds_no_network_web_browser_or_plotting_crate() {
     // The lane is what the alias runs.
     let alias = std::fs::read_to_string(workspace().join(".cargo/config.toml")).unwrap();
     for krate in FAST_LANE {
-        assert!(alias.contains(&format!("-p {krate}")), "test-fast runs {krate}");
+        assert!(
+            alias.contains(&format!("-p {krate}")),
+            "test-fast runs {krate}"
+        );
     }
 }
 
