@@ -7,7 +7,7 @@ use iceoryx2::identifiers::UniquePublisherId;
 use swarmrt_ipc::{self as ipc, IpcError};
 use swarmrt_protocol::Command;
 
-use super::shell::ShellStats;
+use super::stats::ShellStats;
 use crate::inbox;
 use crate::supervisor::hello::{Bindings, Sample};
 

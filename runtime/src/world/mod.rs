@@ -2,13 +2,15 @@
 
 mod answers;
 pub mod cli;
+mod collect;
 mod control;
 pub mod mode;
 mod realtime;
 mod remote;
 pub mod shell;
+pub mod stats;
 mod ticks;
 pub mod timing;
 
 pub use mode::Mode;
-pub use realtime::RealtimeStats;
+pub use stats::{RealtimeStats, ShellStats};

@@ -17,7 +17,7 @@ use swarmrt_world::World;
 
 use super::answers::{Answers, Hellos, Origin};
 use super::control::report;
-use super::shell::ShellStats;
+use super::stats::ShellStats;
 use crate::supervisor::hello::is_hello;
 
 /// How long the world waits at the end for every host to say its robots are gone, before it

@@ -6,9 +6,10 @@
 //! The world core is driven by the one lock-step tick ([`swarmrt_world::lockstep`]) with
 //! [`Processes`], the robots as this shell reaches them. Its parts: [`super::answers`]
 //! (whose answer a command is), [`super::ticks`] (the tick over processes: faults, publish,
-//! collect, rounds; the records), [`super::realtime`] (pacing by the wall clock),
-//! [`super::remote`] (the hosts of a `--hosts` run), [`super::control`] (the orchestrator's
-//! lines).
+//! rounds; the records), [`super::collect`] (waiting for the answers, in lock-step or by the
+//! wall clock), [`super::realtime`] (the wall clock's state), [`super::remote`] (the hosts of
+//! a `--hosts` run), [`super::control`] (the orchestrator's lines), [`super::stats`] (what
+//! only the shell knows).
 
 use std::time::{Duration, Instant};
 
@@ -26,39 +27,14 @@ use swarmrt_world::records::RecordWriter;
 use super::answers::{self, Answers, Hellos};
 use super::control::{drain_control, report, spawn_control_thread, wait};
 use super::mode::{Mode, refuse_combination};
-use super::realtime::{Realtime, RealtimeStats};
+use super::realtime::Realtime;
 use super::remote::Remote;
-use super::ticks::Stamps;
-use super::timing::{TickTimer, TickTiming};
+use super::stats::ShellStats;
+use super::timing::{Stamps, TickTimer};
 use crate::supervisor::hello::Bindings;
 
 /// Longest the world waits for all robots to say hello.
 const STARTUP_TIMEOUT: Duration = Duration::from_secs(120);
-
-/// Numbers only the shell knows (wall-clock dependent, so kept out of the replayable records).
-#[derive(Debug, Default, serde::Serialize)]
-pub struct ShellStats {
-    /// Robot-ticks in which a robot answered after `scenario.deadline_ms`.
-    pub late: u64,
-    /// Samples from publishers that never said hello as a robot of this run.
-    pub unknown_sender: u64,
-    /// Extra samples from a robot that had already answered the current tick.
-    pub extra_commands: u64,
-    /// Hellos that claimed an id already taken, or came from an already bound publisher.
-    pub bad_hello: u64,
-    /// Wall-clock cost of the ticks and where it went.
-    pub timing: TickTiming,
-    /// Traffic with each remote host (`--hosts` runs only).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub link: Vec<swarmrt_hosts::world_side::HostTraffic>,
-    /// TLS handshakes refused on the hosts' port (`--hosts` runs only): strangers, or hosts
-    /// with the wrong certificate, counted instead of logged one by one.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub tls: Option<swarmrt_hosts::noise::Refusals>,
-    /// How the wall clock went (`--realtime` runs only).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub realtime: Option<RealtimeStats>,
-}
 
 /// Runs the world of `run` with `cfg`, writing records into `out_dir`. With `hosts`, the
 /// robots it names run on other hosts and are reached over Zenoh; `layout` is what their

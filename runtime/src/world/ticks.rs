@@ -25,29 +25,6 @@ const PROGRESS_EVERY: Duration = Duration::from_millis(200);
 /// reads memory then).
 pub const EARLY_REPORTS: u64 = 32;
 
-/// When the phases of the current tick began, for `shell.timing`.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Stamps {
-    observe: Instant,
-    publish: Instant,
-    wait: Instant,
-    step: Instant,
-    publish_cpu: u64,
-}
-
-impl Default for Stamps {
-    fn default() -> Stamps {
-        let now = Instant::now();
-        Stamps {
-            observe: now,
-            publish: now,
-            wait: now,
-            step: now,
-            publish_cpu: 0,
-        }
-    }
-}
-
 impl Robots for Processes<'_> {
     type Error = IpcError;
 
@@ -270,7 +247,7 @@ impl Processes<'_> {
     /// Sets the bell's target for the pending robots that count their answers, given the
     /// answer count `base` read before the last gather: the last of them notifies. True when
     /// the count already reached it (an answer came in between): gather again, do not sleep.
-    fn expect_answers(&self, base: u64) -> bool {
+    pub(super) fn expect_answers(&self, base: u64) -> bool {
         let Some(counting) = &self.counting else {
             return false;
         };
@@ -289,42 +266,5 @@ impl Processes<'_> {
         let target = base + waiting;
         bell.expect(target);
         bell.answers() >= target
-    }
-
-    /// Lock-step: waits until every pending robot answered (a tick's answers, or a round's
-    /// reactions). Past `scenario.deadline_ms` the late ones are counted; past
-    /// `scenario.unresponsive_ms` they are given up.
-    fn collect(&mut self, world: &mut World, tick: u64) -> Result<(), IpcError> {
-        let sent_at = Instant::now();
-        let mut late_logged = false;
-        loop {
-            let base = self.ports.bell.answers();
-            self.gather(world)?;
-            if self.answers.pending.is_empty() || self.interrupted {
-                return Ok(());
-            }
-            let waited = sent_at.elapsed();
-            if waited >= self.unresponsive {
-                for robot in std::mem::take(&mut self.answers.pending) {
-                    self.hellos.forget(robot);
-                    give_up(world, robot, waited, "no answer");
-                }
-                return Ok(());
-            }
-            let timeout = if waited < self.deadline {
-                self.deadline - waited
-            } else {
-                if !late_logged {
-                    late_logged = true;
-                    self.stats.late += self.answers.pending.len() as u64;
-                    tracing::warn!(tick, late = ?self.answers.pending, "robots past the deadline");
-                }
-                self.unresponsive - waited
-            };
-            if self.expect_answers(base) {
-                continue;
-            }
-            self.sleep(timeout)?;
-        }
     }
 }

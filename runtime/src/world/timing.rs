@@ -4,6 +4,8 @@
 //! Tick durations go into a log-bucketed histogram (1 % wide buckets), so memory stays
 //! constant however long a run is, and percentiles are exact to within 1 %.
 
+use std::time::Instant;
+
 use serde::Serialize;
 
 use swarmrt_world::{Stage, StageTimes};
@@ -265,5 +267,28 @@ mod tests {
         assert!(sensing > 0);
         assert_eq!(s.stage_sensing_ms_mean, sensing as f64 / 2.0 / 1e6);
         assert_eq!(s.tick_ms_max, 0.0, "stages are not added to the tick again");
+    }
+}
+
+/// When the phases of the current tick began, for `shell.timing`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Stamps {
+    pub(crate) observe: Instant,
+    pub(crate) publish: Instant,
+    pub(crate) wait: Instant,
+    pub(crate) step: Instant,
+    pub(crate) publish_cpu: u64,
+}
+
+impl Default for Stamps {
+    fn default() -> Stamps {
+        let now = Instant::now();
+        Stamps {
+            observe: now,
+            publish: now,
+            wait: now,
+            step: now,
+            publish_cpu: 0,
+        }
     }
 }
