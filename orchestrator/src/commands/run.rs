@@ -139,19 +139,15 @@ fn refuse_combinations(args: &RunArgs, cfg: &swarmrt_scenario::Config) -> SwarmR
     if args.in_process {
         crate::config::refuse_foreign_in_process(cfg, &args.config, "--in-process")?;
     }
-    if cfg.radio.rounds > 0 && (args.realtime || args.hosts.is_some()) {
-        let flag = if args.realtime {
-            "--realtime"
-        } else {
-            "--hosts"
-        };
-        return Err(SwarmError::User(format!(
-            "{}: key `radio.rounds`: expected 0 with {flag}, got {}: propagation rounds need \
-             every robot's answer within the tick on this host (drop {flag}, or set radio.rounds = 0)",
-            args.config.display(),
-            cfg.radio.rounds
-        )));
-    }
+    use swarmrt_runtime::world::{Mode as Pace, mode::refuse_combination};
+    let pace = if args.realtime {
+        Pace::Realtime
+    } else {
+        Pace::LockStep
+    };
+    // Decided where the world process decides it too (`runtime/src/world/mode.rs`).
+    refuse_combination(cfg, pace, args.hosts.is_some())
+        .map_err(|r| SwarmError::User(format!("{}: {r}", args.config.display())))?;
     Ok(())
 }
 
