@@ -5,7 +5,7 @@ use serde_json::Value;
 use swarmrt_agent::registry::{Configured, Plugin};
 use swarmrt_scenario::Config;
 
-use crate::overlay::{Headline, LaneChange, Overlay, RoleDef};
+use crate::overlay::{Meaning, Overlay, RoleDef};
 
 /// The overlay of the config's behaviour (none for a kind the registry does not know, which
 /// a loaded config cannot have), its parameters parsed once.
@@ -29,16 +29,18 @@ impl Overlay for Registered {
     fn initial_role(&self, id: u32) -> Option<u8> {
         self.configured.as_ref()?.initial_role(id)
     }
-    fn role_after(&self, id: u32, note: &Value) -> Option<u8> {
-        let note = self.plugin?.read_note(note)?;
-        self.configured.as_ref()?.role_after(id, &note)
-    }
-    fn headline(&self, note: &Value) -> Option<Headline> {
-        let p = self.plugin?;
-        p.headline(&p.read_note(note)?)
-    }
-    fn lane(&self, note: &Value) -> Option<LaneChange> {
-        let p = self.plugin?;
-        p.lane(&p.read_note(note)?)
+    /// The note is decoded into the behaviour's typed note once, then asked three things.
+    fn read(&self, id: u32, note: &Value) -> Meaning {
+        let Some((p, note)) = self.plugin.and_then(|p| Some((p, p.read_note(note)?))) else {
+            return Meaning::default();
+        };
+        Meaning {
+            role: self
+                .configured
+                .as_ref()
+                .and_then(|c| c.role_after(id, &note)),
+            headline: p.headline(&note),
+            lane: p.lane(&note),
+        }
     }
 }

@@ -192,17 +192,18 @@ impl EventsModel {
                         .unwrap_or_else(|_| String::from_utf8_lossy(line).into_owned());
                     list.push((tick, text));
                 }
-                if let Some(role) = self.overlay.role_after(robot, &note)
+                let meaning = self.overlay.read(robot, &note);
+                if let Some(role) = meaning.role
                     && let Some(list) = self.roles.get_mut(robot as usize)
                 {
                     list.push((tick, role));
                 }
-                if let Some(h) = self.overlay.headline(&note) {
+                if let Some(h) = meaning.headline {
                     self.headline(tick, robot, h);
                 }
                 if let Some(LaneChange {
                     role, term, commit, ..
-                }) = self.overlay.lane(&note)
+                }) = meaning.lane
                 {
                     self.lanes.push(LanePoint {
                         tick,
@@ -278,7 +279,7 @@ impl EventsModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::overlay::{Headline, RoleDef};
+    use crate::overlay::{Headline, Meaning, RoleDef};
 
     struct Test;
     impl Overlay for Test {
@@ -291,22 +292,20 @@ mod tests {
         fn initial_role(&self, id: u32) -> Option<u8> {
             (id == 1).then_some(0)
         }
-        fn role_after(&self, _id: u32, note: &Value) -> Option<u8> {
-            note.get("become").and_then(|v| v.as_u64()).map(|v| v as u8)
-        }
-        fn headline(&self, note: &Value) -> Option<Headline> {
-            note.get("veto").map(|m| Headline {
-                kind: "veto",
-                text: "veto".into(),
-                others: vec![m.as_u64().unwrap() as u32],
-            })
-        }
-        fn lane(&self, note: &Value) -> Option<LaneChange> {
-            note.get("term").map(|t| LaneChange {
-                role: Some("leader"),
-                term: t.as_u64(),
-                ..LaneChange::default()
-            })
+        fn read(&self, _id: u32, note: &Value) -> Meaning {
+            Meaning {
+                role: note.get("become").and_then(|v| v.as_u64()).map(|v| v as u8),
+                headline: note.get("veto").map(|m| Headline {
+                    kind: "veto",
+                    text: "veto".into(),
+                    others: vec![m.as_u64().unwrap() as u32],
+                }),
+                lane: note.get("term").map(|t| LaneChange {
+                    role: Some("leader"),
+                    term: t.as_u64(),
+                    ..LaneChange::default()
+                }),
+            }
         }
     }
 

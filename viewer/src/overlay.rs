@@ -6,17 +6,24 @@ use serde_json::Value;
 
 pub use swarmrt_agent::overlay::{Headline, LaneChange, RoleDef};
 
+/// What one recorded note means on the page.
+#[derive(Debug, Default)]
+pub struct Meaning {
+    /// The role its robot is in after reporting it, if it changed.
+    pub role: Option<u8>,
+    /// A timeline mark.
+    pub headline: Option<Headline>,
+    /// The consensus lane change it makes.
+    pub lane: Option<LaneChange>,
+}
+
 /// A behaviour's overlay, as the viewer uses it. Notes are the `note` field of a recorded
-/// note event, as JSON.
+/// note event, as JSON, read once each.
 pub trait Overlay: Send + Sync {
     /// The roles, indexed by the role byte.
     fn roles(&self) -> &'static [RoleDef];
     /// Robot `id`'s role at the start.
     fn initial_role(&self, id: u32) -> Option<u8>;
-    /// The role robot `id` is in after reporting `note`, if it changed.
-    fn role_after(&self, id: u32, note: &Value) -> Option<u8>;
-    /// A timeline mark for `note`.
-    fn headline(&self, note: &Value) -> Option<Headline>;
-    /// The consensus lane change `note` makes.
-    fn lane(&self, note: &Value) -> Option<LaneChange>;
+    /// What `note`, reported by robot `id`, means.
+    fn read(&self, id: u32, note: &Value) -> Meaning;
 }
