@@ -83,8 +83,9 @@ const FAST_LANE: [&str; 6] = [
 ];
 
 /// What the fast lane must not build, tests included: shared memory, the network, the web,
-/// a browser, plots and the MCAP container.
-const HEAVY: [&str; 11] = [
+/// a browser, plots and the MCAP container (criterion, a dev-dependency, brings clap: that
+/// one is no I/O stack there).
+const HEAVY: [&str; 10] = [
     "iceoryx2",
     "zenoh",
     "tokio",
@@ -95,7 +96,6 @@ const HEAVY: [&str; 11] = [
     "image",
     "mcap",
     "rustls",
-    "clap",
 ];
 
 /// The heavy crates in `krate`'s normal and dev dependency trees.
