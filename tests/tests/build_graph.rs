@@ -52,17 +52,22 @@ const IO_STACKS: [&str; 6] = [
     "clap",
 ];
 
-/// The I/O crates in `krate`'s normal dependency tree.
-fn io_stacks_of(krate: &str) -> Vec<String> {
-    let mut found: Vec<String> = cargo_tree(&["-p", krate, "-e", "normal"])
+/// The crates of `list` in `krate`'s dependency tree along `edges` (`normal`, `normal,dev`).
+fn found_in(krate: &str, edges: &str, list: &[&str]) -> Vec<String> {
+    let mut found: Vec<String> = cargo_tree(&["-p", krate, "-e", edges])
         .iter()
         .filter_map(|l| l.split(' ').next())
-        .filter(|name| IO_STACKS.contains(name))
+        .filter(|name| list.contains(name))
         .map(str::to_string)
         .collect();
     found.sort();
     found.dedup();
     found
+}
+
+/// The I/O crates in `krate`'s normal dependency tree.
+fn io_stacks_of(krate: &str) -> Vec<String> {
+    found_in(krate, "normal", &IO_STACKS)
 }
 
 #[test]
@@ -100,15 +105,7 @@ const HEAVY: [&str; 10] = [
 
 /// The heavy crates in `krate`'s normal and dev dependency trees.
 fn heavy_in(krate: &str) -> Vec<String> {
-    let mut found: Vec<String> = cargo_tree(&["-p", krate, "-e", "normal,dev"])
-        .iter()
-        .filter_map(|l| l.split(' ').next())
-        .filter(|name| HEAVY.contains(name))
-        .map(str::to_string)
-        .collect();
-    found.sort();
-    found.dedup();
-    found
+    found_in(krate, "normal,dev", &HEAVY)
 }
 
 #[test]
