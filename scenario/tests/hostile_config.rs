@@ -32,7 +32,7 @@ proptest! {
         match Config::from_toml_str(&case.name, &case.text, &case.overrides) {
             Ok(cfg) => {
                 // Compared as text: `[behaviour]` is opaque here, and may hold a NaN the
-                // behaviour refuses later (`tests/tests/config_fuzz.rs` goes that far).
+                // behaviour refuses later (`tests/tests/e2e/config_fuzz.rs` goes that far).
                 let resolved = cfg.to_toml();
                 let again = Config::from_toml_str("config.toml", &resolved, &[])
                     .map(|c| c.to_toml());
@@ -100,7 +100,7 @@ fn a_config_past_one_mebibyte_is_refused_by_its_size() {
 #[test]
 fn a_device_a_fifo_and_a_directory_are_refused_without_blocking() {
     // /dev/null, not /dev/zero: a loader without the bound would read /dev/zero until this
-    // test process is killed for its memory (`tests/tests/bad_input.rs` tries /dev/zero in a
+    // test process is killed for its memory (`tests/tests/e2e/bad_input.rs` tries /dev/zero in a
     // child process with a capped address space).
     let e = Config::load(Path::new("/dev/null"), &[]).unwrap_err();
     assert_eq!(

@@ -1,5 +1,5 @@
 """Reads a `swarm export --mcap` file with the PyPI `mcap` package and prints what the
-end-to-end test (tests/tests/export_mcap.rs) checks, as one JSON object:
+end-to-end test (tests/tests/e2e/export_mcap.rs) checks, as one JSON object:
 
 - channels: topic, schema name, schema encoding, message encoding (in channel id order);
 - counts: messages per topic, and the summary's statistics' total;

@@ -1,4 +1,4 @@
-//! The C side of the C-robot tests (`tests/tests/c_robots.rs`): a C compiler (installed with
+//! The C side of the C-robot tests (`tests/tests/e2e/c_robots.rs`): a C compiler (installed with
 //! apt when missing), `libswarmrt.a` (package `swarmrt-c`) built once per test process with the
 //! tests' profile, and C programs compiled against it, among them `examples/c/goto.c`.
 

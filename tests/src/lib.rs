@@ -1,5 +1,6 @@
-//! Support for the end-to-end tests in `tests/tests/`: builds the four binaries once, runs
-//! `swarm` with a watchdog, and reads run directories.
+//! Support for the end-to-end tests (`tests/tests/e2e/`, one test binary, and the viewer's
+//! `tests/tests/viewer.rs`): builds the four binaries once, runs `swarm` with a watchdog, and
+//! reads run directories.
 #![warn(missing_docs)]
 
 pub mod browser;
@@ -45,6 +46,15 @@ pub fn bin_dir() -> &'static Path {
         let release = profile_dir.file_name().is_some_and(|n| n == "release");
         let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_string());
         let mut cmd = Command::new(cargo);
+        // Without the variables cargo sets for a running test: ring's build script tracks
+        // CARGO_MANIFEST_DIR, so a build that inherited this package's value rebuilt ring and
+        // all that hangs on it (45 s on a fresh clone), twice a suite, and once more for the
+        // next plain `cargo build`.
+        for (key, _) in std::env::vars_os() {
+            if key.to_str().is_some_and(is_test_time_cargo_var) {
+                cmd.env_remove(key);
+            }
+        }
         cmd.current_dir(workspace()).args([
             "build",
             "--quiet",
@@ -60,6 +70,22 @@ pub fn bin_dir() -> &'static Path {
         assert!(status.success(), "building the binaries failed");
         profile_dir
     })
+}
+
+/// True for the variables cargo sets in a test's environment that describe the package under
+/// test (not cargo's configuration, which a nested build must keep).
+fn is_test_time_cargo_var(key: &str) -> bool {
+    const EXACT: [&str; 8] = [
+        "CARGO_MANIFEST_DIR",
+        "CARGO_MANIFEST_PATH",
+        "CARGO_MANIFEST_LINKS",
+        "CARGO_CRATE_NAME",
+        "CARGO_BIN_NAME",
+        "CARGO_PRIMARY_PACKAGE",
+        "CARGO_TARGET_TMPDIR",
+        "CARGO_RUSTC_CURRENT_DIR",
+    ];
+    EXACT.contains(&key) || key.starts_with("CARGO_PKG_") || key.starts_with("CARGO_BIN_EXE_")
 }
 
 /// Path of the `swarm` binary.
@@ -310,8 +336,11 @@ pub fn runs(program: &str, arg: &str) -> bool {
 
 /// `apt-get install -y <packages>`, after an `apt-get update` when the first try fails (a
 /// fresh image has no package lists), so the README's test command needs no set-up step on a
-/// fresh Debian machine. `Err` says which step failed.
+/// fresh Debian machine. `Err` says which step failed. One install at a time: the tests of one
+/// binary run in parallel and dpkg takes a lock that a second apt-get would fail on.
 pub fn apt_install(packages: &[&str]) -> Result<(), String> {
+    static APT: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = APT.lock().unwrap_or_else(|e| e.into_inner());
     let install = || {
         Command::new("apt-get")
             .args(["install", "-y", "-qq"])

@@ -2,7 +2,7 @@
 //! text, random `--set key=value` overrides and random TOML-ish text.
 //!
 //! Shared by `agent/tests/config_fuzz.rs` (in-process, many cases) and
-//! `tests/tests/config_fuzz.rs` (through the `swarm` binary), which includes it with `#[path]`.
+//! `tests/tests/e2e/config_fuzz.rs` (through the `swarm` binary), which includes it with `#[path]`.
 //! The `[behaviour]` keys and kinds come from the behaviour registry, so a new behaviour is
 //! fuzzed without editing this file.
 //! Every draw comes from proptest's runner, which the tests seed with a fixed seed.

@@ -22,7 +22,7 @@ sweep() {
 }
 
 # Fig. 11-12: both maps, the paper's speeds and turn angles, 5 seeds (in-process: the same
-# bytes as processes, see tests/tests/formation.rs).
+# bytes as processes, see tests/tests/e2e/formation.rs).
 for map in simple complex; do
   sweep $map configs/formation_$map.toml --vary behaviour.speed=$SPEEDS \
     --vary behaviour.turn_deg=1,5,10,20 --seeds 5 --in-process

@@ -28,7 +28,7 @@ done
 "$SWARM" sweep configs/grouping_s4.toml --vary robots.count=9 --seeds "$SEEDS" \
   --start-seed 1 --jobs "$JOBS" --out "$OUT/s4" "${M[@]}"
 
-# Beyond the paper, in-process (the same bytes as processes, see tests/tests/grouping.rs):
+# Beyond the paper, in-process (the same bytes as processes, see tests/tests/e2e/grouping.rs):
 # radio loss 0-50 % and delay 0-10 ticks on S1 (8 robots) and S2, 3 seeds each.
 for sc in s1 s2; do
   "$SWARM" sweep configs/grouping_$sc.toml --vary radio.loss=0,0.1,0.2,0.3,0.4,0.5 \

@@ -35,7 +35,7 @@ done
 keep "$OUT/calibrated" calibrated
 
 # Beyond the paper: p̄ against radio loss and delay, environment 1, 3 seeds each (in-process:
-# the same bytes as processes, see tests/tests/flocking.rs).
+# the same bytes as processes, see tests/tests/e2e/flocking.rs).
 "$SWARM" sweep configs/flocking_obstacles.toml --vary radio.loss=0,0.1,0.2,0.3,0.4,0.5 \
   --vary radio.delay_ticks=0,2,5,10 --set robots.start.jitter=0.02 --seeds 3 --jobs "$JOBS" \
   --in-process --out "$OUT/radio" \

@@ -35,7 +35,7 @@ CALIBRATED=(
 
 # The paper ran NR-PSO more than once ("from a run to another, values are very different"):
 # five tunes per world, --seed 1-5 (seed 1 is the tune the tables below use). In-process runs
-# give the same fitness as robot processes (tests/tests/tune.rs), at a fraction of the cost.
+# give the same fitness as robot processes (tests/tests/e2e/tune.rs), at a fraction of the cost.
 for seed in ${TUNE_SEEDS:-1 2 3 4 5}; do
   "$SWARM" tune configs/flocking_pso.toml "${PARAMS[@]}" --fitness flocking.fitness --maximize \
     --particles 7 --iterations 25 --evaluations 14 --jobs "$JOBS" --seed "$seed" --in-process \

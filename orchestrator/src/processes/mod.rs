@@ -44,7 +44,7 @@ pub use swarmrt_scenario::process::{child_command, describe, signal_all};
 /// How long robots get to exit on the world's shutdown sample before they are sent SIGTERM
 /// (a robot that subscribed after that sample never sees it). The wait ends as soon as all
 /// have gone, so only a robot that missed the sample pays it: 10 s leaves a loaded 2-core
-/// machine room (a thawed robot once took more than 1 s there, `tests/tests/faults.rs`).
+/// machine room (a thawed robot once took more than 1 s there, `tests/tests/e2e/faults.rs`).
 const SHUTDOWN_GRACE: Duration = Duration::from_secs(10);
 /// How long a host launcher's exit waits for the end of its stdout, which a process it
 /// started may still hold open.

@@ -662,7 +662,7 @@ impl ShellSide for HostShell<'_> {
 /// Test hook (feature `misbehave`, test builds only): `SWARMRT_TEST_HOST_FLOOD=<host>`
 /// makes host `<host>` flood the world with valid empty batches on its own up key, from a
 /// thread of its own, from its join to its end: the attack of a host holding a valid
-/// certificate (issue 48, `tests/tests/multihost.rs`).
+/// certificate (issue 48, `tests/tests/e2e/multihost.rs`).
 #[cfg(feature = "misbehave")]
 pub const FLOOD_ENV: &str = "SWARMRT_TEST_HOST_FLOOD";
 

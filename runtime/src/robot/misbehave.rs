@@ -1,5 +1,5 @@
 //! Test hooks: one robot corrupts its commands on purpose so the tests can check the world's
-//! input checks (`tests/tests/bad_robots.rs`). Compiled only with the `misbehave` feature.
+//! input checks (`tests/tests/e2e/bad_robots.rs`). Compiled only with the `misbehave` feature.
 
 use std::time::Duration;
 

@@ -6,7 +6,7 @@
 //! floats almost never repeat a point, and those are what the geometry library chokes on.
 //!
 //! Shared by `scenario/tests/hostile_config.rs` (load and validate) and
-//! `tests/tests/config_fuzz.rs` (everything `swarm check` does), which include it with
+//! `tests/tests/e2e/config_fuzz.rs` (everything `swarm check` does), which include it with
 //! `#[path]`. Every draw comes from proptest's runner, seeded by [`runner`].
 
 #![allow(dead_code)]

@@ -5,9 +5,9 @@
 //! The mutations are those of `agent/tests/config_fuzz.rs`, from a fixed seed; explore
 //! further with `PROPTEST_CASES` and `PROPTEST_RNG_SEED`.
 
-#[path = "../../scenario/tests/common/hostile.rs"]
+#[path = "../../../scenario/tests/common/hostile.rs"]
 mod hostile;
-#[path = "../../agent/tests/common/mutate.rs"]
+#[path = "../../../agent/tests/common/mutate.rs"]
 mod mutate;
 
 use std::path::Path;

@@ -4,8 +4,8 @@
 //! are checked in under `tests/golden/`, and the same `metrics.json` apart from wall-clock keys.
 //!
 //! A change that alters a record on purpose regenerates the hashes with
-//! `SWARMRT_UPDATE_PINS=1 cargo test -p swarmrt-tests --test records_pinned` and says why in
-//! its commit; the diff of `tests/golden/` then shows exactly which runs changed.
+//! `SWARMRT_UPDATE_PINS=1 cargo test -p swarmrt-tests --test e2e records_pinned::` and says
+//! why in its commit; the diff of `tests/golden/` then shows exactly which runs changed.
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -298,7 +298,7 @@ fn every_config_is_pinned() {
         assert!(
             source.contains(&format!("check(\"{name}\""))
                 || source.contains(&format!("check_ticks(\"{name}\"")),
-            "configs/{name}.toml has no pinned-records test in tests/tests/records_pinned.rs"
+            "configs/{name}.toml has no pinned-records test in tests/tests/e2e/records_pinned.rs"
         );
     }
 }
