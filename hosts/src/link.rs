@@ -7,6 +7,7 @@
 //! subscribed to: its own observation slots.
 
 use std::path::Path;
+use std::time::Duration;
 use swarmrt_protocol::PROTOCOL_VERSION;
 use swarmrt_protocol::messages::{Command, MAX_INBOX, MAX_LIDAR_RAYS, MAX_OUTBOX, Observation};
 
@@ -182,13 +183,27 @@ pub fn world_session(
     zenoh::open(c).wait()
 }
 
-/// A host's session: a client of the world at `connect`, trying for up to 10 s, for a host
-/// of `robots` robots.
+/// How long a host keeps trying to reach the world before it gives up.
+pub const HOST_CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// A host's session: a client of the world at `connect`, trying for up to
+/// [`HOST_CONNECT_TIMEOUT`], for a host of `robots` robots.
 pub fn host_session(connect: &str, robots: usize, tls: Tls) -> Result<zenoh::Session, LinkError> {
+    host_session_within(connect, robots, tls, HOST_CONNECT_TIMEOUT)
+}
+
+/// [`host_session`], trying for `within`: the tests of refused certificates wait less than a
+/// host would for a refusal they know is coming (a refused handshake is retried until then).
+pub fn host_session_within(
+    connect: &str,
+    robots: usize,
+    tls: Tls,
+    within: Duration,
+) -> Result<zenoh::Session, LinkError> {
     let mut c = zenoh::Config::from_json5(&common("client", max_message_size(robots), 1))?;
     set_tls(&mut c, "connect", tls)?;
     c.insert_json5("connect/endpoints", &serde_json::to_string(&[connect])?)?;
-    c.insert_json5("connect/timeout_ms", "10000")?;
+    c.insert_json5("connect/timeout_ms", &within.as_millis().to_string())?;
     c.insert_json5("connect/exit_on_failure", "true")?;
     zenoh::open(c).wait()
 }

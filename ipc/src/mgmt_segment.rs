@@ -239,14 +239,17 @@ mod tests {
                 p.display()
             )
         );
+        // A node of the run makes that check before iceoryx2 opens the segment.
+        let Err(by_node) = crate::node(&run.0, "late") else {
+            panic!("a node was made over a segment others may open");
+        };
+        assert_eq!(by_node.to_string(), e);
         // Truncated to nothing (what another user did to the 0666 one): refused after the
-        // timeout instead of the wait for ever inside iceoryx2.
+        // timeout (200 ms here, a run's 10 s) instead of the wait for ever inside iceoryx2.
+        // Through a whole run: `local_users::another_user_cannot_truncate_a_runs_segments...`.
         std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o600)).unwrap();
         std::fs::File::create(&p).unwrap();
-        let Err(e) = crate::node(&run.0, "late") else {
-            panic!("a node was made over an empty segment");
-        };
-        let e = e.to_string();
+        let e = ensure(&cfg).unwrap_err().to_string();
         assert!(e.contains("it is still empty after"), "{e}");
         // A link planted at its name is refused, not followed.
         std::fs::remove_file(&p).unwrap();
