@@ -247,6 +247,88 @@ pub struct WorldLink {
     session: zenoh::Session,
 }
 
+/// Host `i`'s ports at the world: its down publisher and its up subscriber, which takes a
+/// message only while the host's share of the queue has room and decodes it on Zenoh's thread.
+fn declare_host(
+    session: &zenoh::Session,
+    run_id: &str,
+    i: usize,
+    h: &crate::hosts_file::Host,
+    tx: Sender<Heard>,
+) -> Result<(Remote, zenoh::pubsub::Subscriber<()>, Arc<Share>), LinkError> {
+    let down = session
+        .declare_publisher(link::down_key(run_id, &h.name))
+        .congestion_control(CongestionControl::Block)
+        .express(true)
+        .wait()?;
+    let max = 2 * h.robots.len() + 8;
+    let share = Arc::new(Share {
+        host: h.name.clone(),
+        quota: host_quota(h.robots.len()),
+        waiting: AtomicUsize::new(0),
+        resent_waiting: AtomicUsize::new(0),
+        dropped: AtomicU64::new(0),
+        lost: AtomicBool::new(false),
+    });
+    let mine = share.clone();
+    let sub = session
+        .declare_subscriber(link::up_key(run_id, &h.name))
+        .callback(move |sample| {
+            // A full share drops the message before it is even decoded; its kind is its
+            // first byte.
+            let first = sample.payload().slices().next().and_then(|b| b.first());
+            let Some(slot) = mine.take(first.is_some_and(|&k| Up::is_resent(k))) else {
+                return;
+            };
+            let bytes = sample.payload().to_bytes();
+            let heard = match Up::decode(&bytes, max) {
+                Ok(msg) => Heard::Up {
+                    host: i,
+                    msg,
+                    bytes: bytes.len(),
+                    slot,
+                },
+                Err(_) => Heard::Malformed { host: i, slot },
+            };
+            // Cannot be full (see above); disconnected means the world is gone.
+            let _ = tx.try_send(heard);
+        })
+        .wait()?;
+    let remote = Remote {
+        robots: h.robots.clone(),
+        down,
+    };
+    Ok((remote, sub, share))
+}
+
+/// Tells the world once when a host's liveliness token goes (the host lost), in a place of
+/// its own in the queue: a host's flood cannot crowd out its loss.
+fn watch_liveliness(
+    session: &zenoh::Session,
+    file: &HostsFile,
+    run_id: &str,
+    tx: Sender<Heard>,
+    shares: Vec<Arc<Share>>,
+) -> Result<zenoh::pubsub::Subscriber<()>, LinkError> {
+    let names: Vec<String> = file
+        .hosts
+        .iter()
+        .map(|h| link::host_token(run_id, &h.name))
+        .collect();
+    session
+        .liveliness()
+        .declare_subscriber(format!("swarmrt/{run_id}/alive/*"))
+        .callback(move |sample| {
+            if sample.kind() == SampleKind::Delete
+                && let Some(host) = names.iter().position(|n| n == sample.key_expr().as_str())
+                && !shares[host].lost.swap(true, Ordering::AcqRel)
+            {
+                let _ = tx.try_send(Heard::Lost { host });
+            }
+        })
+        .wait()
+}
+
 impl WorldLink {
     /// Listens on the file's endpoint and declares every host's ports. Messages from hosts
     /// arrive on the returned receiver.
@@ -274,71 +356,12 @@ impl WorldLink {
         let mut subscribers = Vec::new();
         let mut shares = Vec::new();
         for (i, h) in file.hosts.iter().enumerate() {
-            let down = session
-                .declare_publisher(link::down_key(run_id, &h.name))
-                .congestion_control(CongestionControl::Block)
-                .express(true)
-                .wait()?;
-            let tx: Sender<Heard> = tx.clone();
-            let max = 2 * h.robots.len() + 8;
-            let share = Arc::new(Share {
-                host: h.name.clone(),
-                quota: host_quota(h.robots.len()),
-                waiting: AtomicUsize::new(0),
-                resent_waiting: AtomicUsize::new(0),
-                dropped: AtomicU64::new(0),
-                lost: AtomicBool::new(false),
-            });
-            shares.push(share.clone());
-            let sub = session
-                .declare_subscriber(link::up_key(run_id, &h.name))
-                .callback(move |sample| {
-                    // A full share drops the message before it is even decoded; its kind is
-                    // its first byte.
-                    let first = sample.payload().slices().next().and_then(|b| b.first());
-                    let Some(slot) = share.take(first.is_some_and(|&k| Up::is_resent(k))) else {
-                        return;
-                    };
-                    let bytes = sample.payload().to_bytes();
-                    let heard = match Up::decode(&bytes, max) {
-                        Ok(msg) => Heard::Up {
-                            host: i,
-                            msg,
-                            bytes: bytes.len(),
-                            slot,
-                        },
-                        Err(_) => Heard::Malformed { host: i, slot },
-                    };
-                    // Cannot be full (see above); disconnected means the world is gone.
-                    let _ = tx.try_send(heard);
-                })
-                .wait()?;
+            let (remote, sub, share) = declare_host(&session, run_id, i, h, tx.clone())?;
+            hosts.push(remote);
             subscribers.push(sub);
-            hosts.push(Remote {
-                robots: h.robots.clone(),
-                down,
-            });
+            shares.push(share);
         }
-        let names: Vec<String> = file
-            .hosts
-            .iter()
-            .map(|h| link::host_token(run_id, &h.name))
-            .collect();
-        let ltx = tx.clone();
-        let lshares = shares.clone();
-        let liveliness = session
-            .liveliness()
-            .declare_subscriber(format!("swarmrt/{run_id}/alive/*"))
-            .callback(move |sample| {
-                if sample.kind() == SampleKind::Delete
-                    && let Some(host) = names.iter().position(|n| n == sample.key_expr().as_str())
-                    && !lshares[host].lost.swap(true, Ordering::AcqRel)
-                {
-                    // Its own place in the queue: a host's flood cannot crowd out its loss.
-                    let _ = ltx.try_send(Heard::Lost { host });
-                }
-            })
-            .wait()?;
+        let liveliness = watch_liveliness(&session, file, run_id, tx, shares.clone())?;
         let token = session
             .liveliness()
             .declare_token(link::world_token(run_id))
