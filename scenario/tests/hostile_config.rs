@@ -24,22 +24,40 @@ fn assert_one_short_line(shown: &str) -> Result<(), TestCaseError> {
     Ok(())
 }
 
+/// What every hostile case must come to: loaded (and its resolved config loads again to the
+/// same text) or refused in one short line.
+fn loads_or_is_refused_in_one_short_line(case: &hostile::Case) -> Result<(), TestCaseError> {
+    match Config::from_toml_str(&case.name, &case.text, &case.overrides) {
+        Ok(cfg) => {
+            // Compared as text: `[behaviour]` is opaque here, and may hold a NaN the
+            // behaviour refuses later (`tests/tests/e2e/config_fuzz.rs` goes that far).
+            let resolved = cfg.to_toml();
+            let again = Config::from_toml_str("config.toml", &resolved, &[]).map(|c| c.to_toml());
+            prop_assert_eq!(again, Ok(resolved), "{:?}", case.what);
+        }
+        Err(e) => assert_one_short_line(&e.to_string())?,
+    }
+    Ok(())
+}
+
+// 1,000 cases in two tests of 500 from two seeds, so that they run side by side.
 proptest! {
-    #![proptest_config(hostile::runner(1000))]
+    #![proptest_config(hostile::runner(500))]
 
     #[test]
     fn hostile_configs_and_sets_load_or_are_refused_in_one_short_line(case in hostile::case()) {
-        match Config::from_toml_str(&case.name, &case.text, &case.overrides) {
-            Ok(cfg) => {
-                // Compared as text: `[behaviour]` is opaque here, and may hold a NaN the
-                // behaviour refuses later (`tests/tests/e2e/config_fuzz.rs` goes that far).
-                let resolved = cfg.to_toml();
-                let again = Config::from_toml_str("config.toml", &resolved, &[])
-                    .map(|c| c.to_toml());
-                prop_assert_eq!(again, Ok(resolved), "{:?}", case.what);
-            }
-            Err(e) => assert_one_short_line(&e.to_string())?,
-        }
+        loads_or_is_refused_in_one_short_line(&case)?;
+    }
+}
+
+proptest! {
+    #![proptest_config(hostile::runner_from(0x48_b0_0e, 500))]
+
+    #[test]
+    fn more_hostile_configs_and_sets_load_or_are_refused_in_one_short_line(
+        case in hostile::case()
+    ) {
+        loads_or_is_refused_in_one_short_line(&case)?;
     }
 }
 

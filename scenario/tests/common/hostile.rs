@@ -18,6 +18,12 @@ use proptest::test_runner::{Config as ProptestConfig, RngSeed};
 /// The runner config of a property: `cases` cases from a fixed seed, no failure files.
 /// `PROPTEST_CASES` and `PROPTEST_RNG_SEED` override both, to explore further by hand.
 pub fn runner(cases: u32) -> ProptestConfig {
+    runner_from(0x48_b0_0d, cases)
+}
+
+/// [`runner`] from another fixed `seed`: one property split into tests that draw different
+/// cases, so that they run on different cores.
+pub fn runner_from(seed: u64, cases: u32) -> ProptestConfig {
     let base = ProptestConfig::default();
     ProptestConfig {
         cases: if std::env::var_os("PROPTEST_CASES").is_some() {
@@ -26,7 +32,7 @@ pub fn runner(cases: u32) -> ProptestConfig {
             cases
         },
         rng_seed: match base.rng_seed {
-            RngSeed::Random => RngSeed::Fixed(0x48_b0_0d),
+            RngSeed::Random => RngSeed::Fixed(seed),
             fixed => fixed,
         },
         failure_persistence: None,
