@@ -30,19 +30,22 @@ fn hosts(dir: &Path, port: u16) -> HostsFile {
 }
 
 fn host(dir: &Path, name: &str, port: u16) -> Result<zenoh::Session, link::LinkError> {
-    let ca = certs::ca_cert(dir);
-    let (cert, key) = certs::host_pair(dir, name);
-    let tls = Tls::Mutual {
-        ca: &ca,
-        cert: &cert,
-        key: &key,
-    };
-    link::host_session(&format!("quic/127.0.0.1:{port}"), 2, tls)
+    host_within(dir, name, port, link::HOST_CONNECT_TIMEOUT)
 }
 
 /// [`host`] for a certificate the world must refuse: it gives up after 3 s, not a host's 10
 /// (a refused handshake is retried until the timeout; a valid one completes in milliseconds).
 fn refused_host(dir: &Path, name: &str, port: u16) -> Result<zenoh::Session, link::LinkError> {
+    host_within(dir, name, port, Duration::from_secs(3))
+}
+
+/// Host `name`'s session with its certificate from `dir`, trying for `within`.
+fn host_within(
+    dir: &Path,
+    name: &str,
+    port: u16,
+    within: Duration,
+) -> Result<zenoh::Session, link::LinkError> {
     let ca = certs::ca_cert(dir);
     let (cert, key) = certs::host_pair(dir, name);
     let tls = Tls::Mutual {
@@ -50,8 +53,7 @@ fn refused_host(dir: &Path, name: &str, port: u16) -> Result<zenoh::Session, lin
         cert: &cert,
         key: &key,
     };
-    let endpoint = format!("quic/127.0.0.1:{port}");
-    link::host_session_within(&endpoint, 2, tls, Duration::from_secs(3))
+    link::host_session_within(&format!("quic/127.0.0.1:{port}"), 2, tls, within)
 }
 
 fn wait_up(heard: &crossbeam_channel::Receiver<Heard>, within: Duration) -> Vec<(usize, Up)> {
