@@ -10,7 +10,8 @@ use swarmrt_scenario::Config;
 /// Environment variable that makes one robot send malformed commands, for tests of the
 /// world's input checks: `<robot>:<mode>` with mode `nan` (NaN speed), `inf` (infinite turn
 /// rate), `fast` (a speed far past the limit), `wrong-tick`, `wrong-version`, `impersonate`
-/// (claims another robot's id), `double` (answers every tick twice), `bad-frame` (an outbox
+/// (claims another robot's id), `double` (answers every tick twice), `stale` (sends a copy
+/// naming the previous tick before each answer), `bad-frame` (an outbox
 /// length past the maximum), `oversized-frame` (a frame length past the payload size),
 /// `garbage-frame` (a payload that is no message), `frame-to-nobody` (a unicast to an unknown
 /// robot), `garbage-notes` (a report that does not decode), `panic` (panics at tick 20) or
@@ -27,6 +28,7 @@ pub(super) enum Misbehave {
     WrongVersion,
     Impersonate,
     Double,
+    Stale,
     BadFrame,
     OversizedFrame,
     GarbageFrame,
@@ -52,6 +54,7 @@ impl Misbehave {
             "wrong-version" => Misbehave::WrongVersion,
             "impersonate" => Misbehave::Impersonate,
             "double" => Misbehave::Double,
+            "stale" => Misbehave::Stale,
             "bad-frame" => Misbehave::BadFrame,
             "oversized-frame" => Misbehave::OversizedFrame,
             "garbage-frame" => Misbehave::GarbageFrame,
@@ -118,6 +121,13 @@ impl Misbehave {
             Misbehave::Double => {
                 ports.publisher.send_copy(cmd)?;
             }
+            Misbehave::Stale if tick > 0 => {
+                ports.publisher.send_copy(Command {
+                    tick: tick - 1,
+                    ..cmd
+                })?;
+            }
+            Misbehave::Stale => {}
             Misbehave::Slow => std::thread::sleep(Duration::from_millis(250)),
             Misbehave::Panic => {}
         }

@@ -30,15 +30,20 @@ pub(super) struct Answers {
     pub(super) pending: BTreeSet<u32>,
     /// The answers, by robot.
     pub(super) commands: Vec<Option<Command>>,
+    /// The tick the answers are awaited for.
+    pub(super) tick: u64,
 }
 
 impl Answers {
     /// Applies one classified command sample: a bound robot's first sample after the
-    /// observation is its answer, whatever it says (World::validate refuses a wrong tick,
-    /// kind, id or version, and the robot stands still this tick instead of the world
-    /// waiting for ever); the rest is counted.
+    /// observation is its answer, whatever it says (World::validate refuses a later tick,
+    /// a wrong kind, id or version, and the robot stands still this tick instead of the world
+    /// waiting for ever); the rest is counted. A sample naming an earlier tick is a copy
+    /// left over from a tick already answered, not this tick's answer: taking it would
+    /// refuse the robot's real answer still on its way, by the luck of wake-up timing.
     pub(super) fn take(&mut self, sample: Sample, c: Command, stats: &mut ShellStats) {
         match sample {
+            Sample::Robot(_) if c.tick < self.tick => stats.extra_commands += 1,
             Sample::Robot(robot) if self.pending.remove(&robot) => {
                 self.commands[robot as usize] = Some(c)
             }

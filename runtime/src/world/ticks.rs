@@ -76,6 +76,7 @@ impl Robots for Processes<'_> {
         };
         let tick = world.tick();
         self.answers.commands.iter_mut().for_each(|c| *c = None);
+        self.answers.tick = tick;
         self.answers.pending = round.iter().map(|b| b.robot).collect();
         rounds.publish(tick, world.round(), round)?;
         self.collect(world, tick)?;
@@ -223,6 +224,7 @@ impl Processes<'_> {
         obs: &[swarmrt_protocol::Observation],
     ) -> Result<(), IpcError> {
         self.answers.commands.iter_mut().for_each(|c| *c = None);
+        self.answers.tick = tick;
         self.answers.pending = world
             .robots()
             .iter()
