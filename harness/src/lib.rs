@@ -5,6 +5,8 @@
 //!
 //! - [`lockstep`]: the tick loop (faults' restarts, observe, every running robot's step, the
 //!   world's step).
+//! - [`env`]: a learning environment's world, the tick split around a policy that answers
+//!   between its halves (the Python package's `swarmrt.env`).
 //! - [`raft_net`]: Raft cores alone in an in-memory network with cut links.
 //! - [`fuzz`]: real agents over the world's radio medium with crashes, restarts and
 //!   partitions, checked every tick (`swarm fuzz`).
@@ -37,6 +39,7 @@
 
 pub mod config;
 pub mod consensus_check;
+pub mod env;
 pub mod fuzz;
 pub mod lockstep;
 pub mod raft_net;

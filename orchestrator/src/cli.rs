@@ -89,6 +89,9 @@ pub struct RunArgs {
     /// How the --view page is served.
     #[command(flatten)]
     pub serve: ServeArgs,
+    /// The ticks done so far, for a caller that shows its own progress (the Python package).
+    #[arg(skip)]
+    pub ticks_done: Option<std::sync::Arc<std::sync::atomic::AtomicU64>>,
 }
 
 /// Where the viewer's page is served.

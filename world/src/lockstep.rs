@@ -55,15 +55,32 @@ pub fn tick<R: Robots>(
     robots: &mut R,
     commands: &mut Vec<Option<Command>>,
 ) -> Result<bool, R::Error> {
+    Ok(begin(world, robots, commands)? && finish(world, robots, commands)?)
+}
+
+/// The first half of [`tick`]: the faults carried out, every robot's answer. A loop whose
+/// robots answer outside the call (a learning environment's policy, between two calls) runs
+/// the tick as `begin`, their answers into `commands`, then [`finish`].
+pub fn begin<R: Robots>(
+    world: &mut World,
+    robots: &mut R,
+    commands: &mut Vec<Option<Command>>,
+) -> Result<bool, R::Error> {
     let signals = world.take_signals();
     robots.carry_out(world, signals)?;
     if robots.stopped() {
         return Ok(false);
     }
     robots.answer(world, commands)?;
-    if robots.stopped() {
-        return Ok(false);
-    }
+    Ok(!robots.stopped())
+}
+
+/// The second half of [`tick`]: the propagation rounds and the world's step.
+pub fn finish<R: Robots>(
+    world: &mut World,
+    robots: &mut R,
+    commands: &mut [Option<Command>],
+) -> Result<bool, R::Error> {
     propagate(world, robots, commands)?;
     if robots.stopped() {
         return Ok(false);

@@ -344,3 +344,37 @@ class Robot:
 def main(step) -> None:
     """`Robot.from_env()`, then `run(step)`, then exit with its code."""
     sys.exit(Robot.from_env().run(step))
+
+
+def run_policy(policy, *, neighbours: int = 8, inbox: int = 4, payload: int = 0) -> None:
+    """This robot process runs `policy`, trained in `swarmrt.env` with the same `neighbours`,
+    `inbox` and `payload`: each tick it gets the observation the environment gives it (the
+    same numbers, computed by the same native code) and answers with its action, sent as the
+    environment applies it. A deterministic policy with the same seed writes the rollout's
+    records. `policy(obs) -> (v, omega)`, or a dict of `move`, `say`, `say_len` with a
+    payload; then exits with the robot's code.
+
+        # policy_robot.py, run as: swarm run CONFIG --set 'robots.program=["python", "policy_robot.py"]'
+        from swarmrt.robot import run_policy
+        run_policy(lambda obs: (0.2, 0.0))
+    """
+    import numpy as np
+
+    from . import _native
+    from ._views import arrays
+
+    robot = Robot.from_env()
+    lidar = robot.config["robots"]["lidar"]
+    layout = (int(lidar.get("rays", 0)), neighbours, inbox, payload)
+    for obs in robot.observations():
+        view = arrays(_native.features(bytes(obs), *layout, float(lidar["range"])), (), layout)
+        action = policy(view)
+        if payload:
+            move = np.asarray(action["move"], dtype=np.float64)
+            say = bytes(np.asarray(action.get("say", b""), dtype=np.uint8).reshape(-1))
+            say = say[: int(action.get("say_len", len(say)))]
+        else:
+            move, say = np.asarray(action, dtype=np.float64), b""
+        raw = _native.command(robot.id, obs.tick, float(move[0]), float(move[1]), list(say))
+        robot.send(Command.from_buffer_copy(raw))
+    sys.exit(robot.exit_code if robot.exit_code is not None else 1)

@@ -92,6 +92,14 @@ fn run_with(
         *viewer = Some(v);
     }
     let pb = progress_bar(cfg.scenario.ticks);
+    let ticks_done = args.ticks_done.clone();
+    let bar = pb.clone();
+    let progress = move |t: u64| {
+        bar.set_position(t);
+        if let Some(done) = &ticks_done {
+            done.store(t, std::sync::atomic::Ordering::Relaxed);
+        }
+    };
     let started = Instant::now();
     let header = RunHeader {
         scenario: cfg.scenario.name.clone(),
@@ -100,14 +108,14 @@ fn run_with(
         agents: cfg.robots.count,
     };
     let ran = if args.in_process {
-        run_in_process(&cfg, &out, &interrupt, &pb)
+        run_in_process(&cfg, &out, &interrupt, &progress)
     } else {
         let opts = processes::RunOptions {
             hosts: hosts.as_ref(),
             insecure_link: args.insecure_link,
             realtime: args.realtime,
         };
-        run_processes(&cfg, &config_path, &out, &opts, interrupt, &pb)
+        run_processes(&cfg, &config_path, &out, &opts, interrupt, &progress)
     };
     pb.finish_and_clear();
     match ran {
@@ -211,13 +219,13 @@ fn run_in_process(
     cfg: &swarmrt_scenario::Config,
     out: &OutDir,
     interrupt: &crossbeam_channel::Receiver<()>,
-    pb: &ProgressBar,
+    progress: &dyn Fn(u64),
 ) -> anyhow::Result<Ran> {
     let (world, interrupted) = swarmrt_harness::lockstep::run_recorded(
         cfg,
         out,
         || interrupt.try_recv().is_ok(),
-        |t| pb.set_position(t),
+        progress,
     )
     // A write failed (e.g. the disk is full): the records stop mid-tick.
     .map_err(|e| anyhow::Error::from(e).context("run failed writing its records"))?;
@@ -240,11 +248,9 @@ fn run_processes(
     out: &OutDir,
     opts: &processes::RunOptions,
     interrupt: crossbeam_channel::Receiver<()>,
-    pb: &ProgressBar,
+    progress: &dyn Fn(u64),
 ) -> anyhow::Result<Ran> {
-    let done = processes::run_on_hosts(cfg, config_path, out, opts, interrupt, |t| {
-        pb.set_position(t)
-    })?;
+    let done = processes::run_on_hosts(cfg, config_path, out, opts, interrupt, progress)?;
     let world = match done.world_metrics {
         Some(report) => Some(
             serde_json::from_value::<WorldSection>(report)
