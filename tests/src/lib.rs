@@ -50,11 +50,7 @@ pub fn bin_dir() -> &'static Path {
         // CARGO_MANIFEST_DIR, so a build that inherited this package's value rebuilt ring and
         // all that hangs on it (45 s on a fresh clone), twice a suite, and once more for the
         // next plain `cargo build`.
-        for (key, _) in std::env::vars_os() {
-            if key.to_str().is_some_and(is_test_time_cargo_var) {
-                cmd.env_remove(key);
-            }
-        }
+        without_test_time_cargo_vars(&mut cmd);
         cmd.current_dir(workspace()).args([
             "build",
             "--quiet",
@@ -70,6 +66,17 @@ pub fn bin_dir() -> &'static Path {
         assert!(status.success(), "building the binaries failed");
         profile_dir
     })
+}
+
+/// `cmd` without the variables cargo set for this test ([`is_test_time_cargo_var`]), for a
+/// command that runs cargo itself.
+pub fn without_test_time_cargo_vars(cmd: &mut Command) -> &mut Command {
+    for (key, _) in std::env::vars_os() {
+        if key.to_str().is_some_and(is_test_time_cargo_var) {
+            cmd.env_remove(key);
+        }
+    }
+    cmd
 }
 
 /// True for the variables cargo sets in a test's environment that describe the package under

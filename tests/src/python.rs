@@ -1,12 +1,15 @@
-//! A Python for the tests of Python robots: a venv under the cargo target directory with the
-//! package in `bindings/python` (and [`TEST_PACKAGES`]) installed, made once and shared by
-//! every test binary.
+//! A Python for the tests of the Python package and of Python robots: a venv under the cargo
+//! target directory with the package in `bindings/python` (all its extras, and
+//! [`TEST_PACKAGES`]) installed, made once and shared by every test binary.
 //!
 //! `pip install ./bindings/python` is what a user runs too, so the tests use the package as
-//! it installs (with `iceoryx2` pinned to `Cargo.lock`'s version by its `pyproject.toml`), not
-//! the source tree on `PYTHONPATH`. The venv is rebuilt when any file of the package changes
-//! (a stamp holds a fingerprint of them), under an exclusive `flock`, so test binaries that
-//! start at the same moment build it once and never use a half-built one. On a fresh Debian
+//! it installs (a wheel built by maturin, with `iceoryx2` pinned to `Cargo.lock`'s version by
+//! its `pyproject.toml`), not the source tree on `PYTHONPATH`. The wheel takes this suite's
+//! own build of the binaries (`SWARMRT_WHEEL_BINARIES`) and builds its native module in the
+//! same profile, so the suite builds the workspace once. The venv is rebuilt when any file of
+//! the package or the `swarm` binary changes (a stamp holds a fingerprint of them), under an
+//! exclusive `flock`, so tests that start at the same moment build it once and never use a
+//! half-built one. On a fresh Debian
 //! machine without Python's venv module, `python3` and `python3-venv` are installed with apt,
 //! as the multi-host tests install iproute2 (`lab.rs`).
 
@@ -21,7 +24,7 @@ use crate::workspace;
 /// PyPI packages the tests' scripts use besides the package (`mcap`:
 /// `tests/scripts/read_mcap.py` reads `swarm export --mcap` files with it). Part of the venv's
 /// stamp: adding one rebuilds the venv.
-pub const TEST_PACKAGES: &[&str] = &["mcap"];
+pub const TEST_PACKAGES: &[&str] = &["mcap", "pytest", "nbclient", "nbformat", "ipykernel"];
 
 /// The package's directory in the workspace.
 pub fn package_dir() -> PathBuf {
@@ -71,7 +74,11 @@ fn fingerprint(dir: &Path) -> String {
         for e in entries.flatten() {
             let p = e.path();
             let name = e.file_name();
-            if name == "__pycache__" || name.to_string_lossy().ends_with(".pyc") {
+            // The wheel's staging directory for the binaries (the build writes it).
+            if name == "__pycache__"
+                || name == "swarmrt.data"
+                || name.to_string_lossy().ends_with(".pyc")
+            {
                 continue;
             }
             if p.is_dir() {
@@ -162,9 +169,16 @@ fn ensure_venv() -> Result<PathBuf, String> {
         ));
     }
 
+    // The native module is built from the whole workspace: the `swarm` binary of the same
+    // build stands for it (its size and time change whenever a crate of it does).
+    let bins = crate::bin_dir();
+    let built = std::fs::metadata(bins.join("swarm"))
+        .map(|m| format!("{} {:?}", m.len(), m.modified().ok()))
+        .map_err(|e| format!("{}: {e}", bins.join("swarm").display()))?;
+    let profile = if bins.ends_with("release") { "release" } else { "dev" };
     // The stamp names the Python too: a venv whose interpreter vanished is rebuilt.
     let want = format!(
-        "{}\n{}\n{}",
+        "{}\n{}\n{}\n{built} {profile}",
         fingerprint(&pkg),
         python.display(),
         TEST_PACKAGES.join(" ")
@@ -176,7 +190,7 @@ fn ensure_venv() -> Result<PathBuf, String> {
     let _ = std::fs::remove_file(&stamp);
     make_venv(&venv)?;
     run(
-        Command::new(&python)
+        crate::without_test_time_cargo_vars(&mut Command::new(&python))
             .args([
                 "-m",
                 "pip",
@@ -184,9 +198,11 @@ fn ensure_venv() -> Result<PathBuf, String> {
                 "--quiet",
                 "--disable-pip-version-check",
             ])
-            .arg(&pkg)
+            .arg(format!("{}[all]", pkg.display()))
             .args(TEST_PACKAGES)
-            .env("PYTHONDONTWRITEBYTECODE", "1"),
+            .env("PYTHONDONTWRITEBYTECODE", "1")
+            .env("SWARMRT_WHEEL_BINARIES", bins)
+            .env("SWARMRT_WHEEL_PROFILE", profile),
         &format!("pip install {}", pkg.display()),
     )?;
     // Written last: a build cut short leaves no stamp and is redone.

@@ -29,6 +29,7 @@ mod grouping;
 mod local_users;
 mod multihost;
 mod planner;
+mod python_package;
 mod python_robots;
 mod radio_record;
 mod records_pinned;

@@ -313,14 +313,16 @@ fn realtime_gives_up_on_a_hung_robot_and_keeps_the_clock() {
             &format!("robots.programs=[{{robots=2, program={hang}}}]"),
             "--set",
             "scenario.deadline_ms=300",
+            // Three seconds: a well-behaved robot starved of CPU by the tests beside it for
+            // one second was given up too (robots 6 and 7 once, in a loaded suite).
             "--set",
-            "scenario.unresponsive_ms=1000",
+            "scenario.unresponsive_ms=3000",
         ],
     );
     assert_eq!(m["ticks"], 30);
     assert_eq!(m["dead"], 1, "{m}");
     assert_eq!(m["unscheduled_deaths"][0]["robot"], 2, "{m}");
-    // Killed after about a second of silence, not after its minute of thinking.
+    // Killed after a few seconds of silence, not after its minute of thinking.
     assert!(m["wall_seconds"].as_f64().unwrap() < 20.0, "{m}");
     let csv = String::from_utf8(bytes(&dir, "trajectory.csv")).unwrap();
     assert!(
