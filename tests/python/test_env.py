@@ -145,3 +145,16 @@ def test_a_robot_killed_by_the_configs_faults_leaves_the_agents():
         if "robot_3" in terminated and terminated["robot_3"]:
             break
     assert "robot_3" not in e.agents and len(e.agents) == 8
+
+
+def test_a_bad_config_or_size_is_refused_with_its_key_and_bound():
+    import swarmrt
+
+    with pytest.raises(swarmrt.ConfigError, match=r"goto_simple.toml: key `radio.losss`"):
+        env.parallel_env(GOTO, set={"radio.losss": 0.1})
+    with pytest.raises(ValueError, match=r"neighbours = 99 is out of range: at most 32"):
+        env.parallel_env(GOTO, neighbours=99)
+    with pytest.raises(swarmrt.ConfigError, match=r"robots.aerial"):
+        env.parallel_env(CONFIGS / "planner_uav3.toml")
+    with pytest.raises(ValueError, match=r"num_envs = 0 is out of range"):
+        env.vector_env(GOTO, num_envs=0)

@@ -77,3 +77,26 @@ def test_plot_draws_the_map_and_every_path(tmp_path):
     pixels = matplotlib.image.imread(path)
     assert pixels.std() > 0.01, "the figure is not blank"
     assert np.isclose(ax.get_xlim()[1], run.config["map"]["bounds"][2])
+
+
+def test_a_tune_gives_its_table_and_best_values():
+    result = swarmrt.tune(CONFIGS / "goto_simple.toml", params={"behaviour.speed": (0.2, 1.0)},
+                          fitness="steps_to_target", particles=3, iterations=2,
+                          set={"scenario.ticks": 200})
+    assert len(result["table"]) == 2 * 3 * 2, "2P evaluations an iteration"
+    best = result["best_toml"]["behaviour"]["speed"]
+    assert 0.2 <= best <= 1.0
+    assert result["best"]
+
+
+def test_view_serves_the_run_until_stopped():
+    import urllib.request
+
+    run = swarmrt.run(CONFIGS / "goto_simple.toml", ticks=10, progress=False)
+    url = run.view()
+    assert url.startswith("http://127.0.0.1:")
+    with urllib.request.urlopen(url, timeout=10) as page:
+        assert page.status == 200
+    proc = run._viewer
+    run.stop_view()
+    assert proc.poll() is not None

@@ -175,7 +175,11 @@ fn ensure_venv() -> Result<PathBuf, String> {
     let built = std::fs::metadata(bins.join("swarm"))
         .map(|m| format!("{} {:?}", m.len(), m.modified().ok()))
         .map_err(|e| format!("{}: {e}", bins.join("swarm").display()))?;
-    let profile = if bins.ends_with("release") { "release" } else { "dev" };
+    let profile = if bins.ends_with("release") {
+        "release"
+    } else {
+        "dev"
+    };
     // The stamp names the Python too: a venv whose interpreter vanished is rebuilt.
     let want = format!(
         "{}\n{}\n{}\n{built} {profile}",

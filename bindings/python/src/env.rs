@@ -227,7 +227,19 @@ impl VecEnv {
                 })?;
             }
         }
-        let outcomes = py.detach(|| step_all(&mut self.envs, &actions, n));
+        // A panic in a world stays on this side: the worlds are then in no state to go on.
+        let outcomes = py
+            .detach(|| {
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    step_all(&mut self.envs, &actions, n)
+                }))
+            })
+            .map_err(|p| {
+                SwarmrtError::new_err(format!(
+                    "internal error in a world's step: {}; reset the environment",
+                    crate::run::panic_message(&p)
+                ))
+            })?;
         let mut rewards = Vec::with_capacity(total);
         let mut terminated = Vec::with_capacity(total);
         let mut truncated = Vec::with_capacity(self.envs.len());

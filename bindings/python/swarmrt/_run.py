@@ -44,24 +44,51 @@ def _toml(value: Any) -> str:
     raise TypeError(f"cannot write {value!r} as a TOML value")
 
 
-def _progress(total: Optional[int], desc: str):
+def _progress(total: Optional[int], desc: str, unit: str = "tick"):
+    """A progress bar that draws in a notebook as in a terminal (tqdm.auto)."""
     from tqdm.auto import tqdm
 
-    return tqdm(total=total, desc=desc, unit="tick", leave=False)
+    return tqdm(total=total, desc=desc, unit=unit, leave=False)
 
 
-def _swarm(args: list[str]) -> subprocess.CompletedProcess:
-    """Runs the `swarm` binary; its one-line error as ConfigError (exit 2) or SwarmrtError."""
-    done = subprocess.run([binary("swarm"), *args], capture_output=True, text=True)
-    if done.returncode == 0:
-        return done
-    lines = [l for l in done.stderr.splitlines() if l.startswith("error: ")]
-    line = lines[-1][len("error: "):] if lines else done.stderr.strip()
-    if done.returncode == 2:
+def _swarm(args: list[str], rows: Optional[Path] = None, total: Optional[int] = None) -> None:
+    """Runs the `swarm` binary; its one-line error as ConfigError (exit 2) or SwarmrtError.
+    With `rows`, a progress bar counts the lines the command has written to that CSV file.
+    Ctrl-C stops the command as a Ctrl-C in its terminal would (SIGINT), then raises."""
+    import signal
+
+    with tempfile.TemporaryFile(mode="w+") as err:
+        proc = subprocess.Popen([binary("swarm"), *args], stdout=subprocess.DEVNULL,
+                                stderr=err, text=True)
+        bar = _progress(total, args[0], unit="run") if rows is not None else None
+        try:
+            while True:
+                try:
+                    proc.wait(timeout=0.2)
+                    break
+                except subprocess.TimeoutExpired:
+                    pass
+                if bar is not None and rows.is_file():
+                    done = max(0, len(rows.read_text().splitlines()) - 1)
+                    bar.update(done - bar.n)
+        except KeyboardInterrupt:
+            proc.send_signal(signal.SIGINT)
+            proc.wait()
+            raise
+        finally:
+            if bar is not None:
+                bar.close()
+        err.seek(0)
+        stderr = err.read()
+    if proc.returncode == 0:
+        return
+    lines = [l for l in stderr.splitlines() if l.startswith("error: ")]
+    line = lines[-1][len("error: "):] if lines else stderr.strip()
+    if proc.returncode == 2:
         raise ConfigError(line)
-    if done.returncode == 130:
+    if proc.returncode == 130:
         raise KeyboardInterrupt(line)
-    raise SwarmrtError(line or f"swarm {args[0]} exited with {done.returncode}")
+    raise SwarmrtError(line or f"swarm {args[0]} exited with {proc.returncode}")
 
 
 class Run:
@@ -139,14 +166,27 @@ class Run:
         return ax
 
     def view(self, port: int = 0) -> str:
-        """Starts `swarm view` on this run in the background; returns the page's URL."""
+        """Starts `swarm view` on this run in the background; returns the page's URL. The
+        page is served until `stop_view()` or the end of this Python process."""
+        import atexit
+
+        self.stop_view()
         proc = subprocess.Popen([binary("swarm"), "view", str(self.dir), "--port", str(port)],
-                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        for line in proc.stdout:
-            if "http://" in line:
-                self._viewer = proc
-                return line[line.index("http://"):].split()[0]
-        raise SwarmrtError(f"swarm view exited with {proc.wait()}")
+                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        line = proc.stdout.readline()
+        if "http://" not in line:
+            raise SwarmrtError(f"swarm view exited with {proc.wait()}")
+        self._viewer = proc
+        atexit.register(self.stop_view)
+        return line.strip()
+
+    def stop_view(self) -> None:
+        """Stops the page `view()` started, if any."""
+        proc = getattr(self, "_viewer", None)
+        if proc is not None and proc.poll() is None:
+            proc.terminate()
+            proc.wait()
+        self._viewer = None
 
     def export_mcap(self, path: str | Path) -> Path:
         """Writes the run as an MCAP file (Foxglove) at `path`."""
@@ -206,7 +246,10 @@ def sweep(config: str | Path, vary: Mapping[str, Iterable[Any]], seeds: int = 1,
         args += ["--jobs", str(jobs)]
     if in_process:
         args.append("--in-process")
-    _swarm(args)
+    runs = seeds
+    for values in vary.values():
+        runs *= len(list(values))
+    _swarm(args, rows=Path(out) / "sweep.csv", total=runs)
     table = pd.read_csv(Path(out) / "sweep.csv")
     table.attrs["dir"] = str(out)
     return table
@@ -232,7 +275,8 @@ def tune(config: str | Path, params: Mapping[str, tuple[float, float]], fitness:
         args += ["--jobs", str(jobs)]
     if in_process:
         args.append("--in-process")
-    _swarm(args)
+    # tune.csv gains a row per evaluation: 2P an iteration by default (`swarm tune --help`).
+    _swarm(args, rows=Path(out) / "tune.csv", total=2 * particles * iterations)
     out = Path(out)
     with open(out / "best.toml", "rb") as f:
         best_toml = tomllib.load(f)

@@ -25,7 +25,15 @@ fn pytest(file: &str) {
     let cwd = tempfile::tempdir().unwrap();
     let child = Command::new(python)
         .current_dir(cwd.path())
-        .args(["-m", "pytest", "-q", "-p", "no:cacheprovider", "-W", "ignore::UserWarning"])
+        .args([
+            "-m",
+            "pytest",
+            "-q",
+            "-p",
+            "no:cacheprovider",
+            "-W",
+            "ignore::UserWarning",
+        ])
         .arg(workspace().join("tests").join("python").join(file))
         .env("SWARMRT_WORKSPACE", workspace())
         .env("PYTHONDONTWRITEBYTECODE", "1")
