@@ -158,3 +158,17 @@ def test_a_bad_config_or_size_is_refused_with_its_key_and_bound():
         env.parallel_env(CONFIGS / "planner_uav3.toml")
     with pytest.raises(ValueError, match=r"num_envs = 0 is out of range"):
         env.vector_env(GOTO, num_envs=0)
+
+
+def test_the_flock_reward_rewards_alignment_and_closeness():
+    e = env.parallel_env(FLOCK, set=SHORT, reward="flock")
+    e.reset(seed=1)
+    _, rewards, *_ = e.step({a: np.zeros(2) for a in e.agents})
+    state = e.state()
+    expected = env.flock_reward(state, [])
+    assert [rewards[f"robot_{i}"] for i in range(10)] == pytest.approx(expected.tolist())
+    aligned = {"x": np.zeros(3), "y": np.zeros(3), "theta": np.full(3, 0.5),
+               "state": np.zeros(3, dtype=np.uint8)}
+    assert env.flock_reward(aligned, []).tolist() == pytest.approx([1.0, 1.0, 1.0])
+    with pytest.raises(ValueError, match="expected \"goal\", \"flock\" or a callable"):
+        env.vector_env(FLOCK, num_envs=2, set=SHORT, reward="nope")

@@ -18,8 +18,10 @@ partitions from the config. An action out of bounds, not finite or of the wrong 
 ValueError naming the agent and the bound (with `clip_actions=True` it is clipped instead,
 and counted in `infos[agent]["clipped"]`).
 
-Rewards: built in, a robot's progress towards its goal this step (metres, by the world's
-truth), +1 on entering it, -1 on a collision that takes it down. `reward=f` replaces it:
+Rewards: `reward="goal"` (the default), a robot's progress towards its goal this step
+(metres, by the world's truth), +1 on entering it, -1 on a collision that takes it down;
+`reward="flock"`, its alignment with the swarm's heading minus a tenth of its distance to the
+swarm's centre (`flock_reward`). `reward=f` replaces them:
 `f(state, events) -> N rewards`, with `state` the world's truth (x, y, theta, v, omega, state
 per robot) and `events` the step's events as dicts (the `events.jsonl` vocabulary). A robot
 that goes down or is killed by the config's faults is terminated and leaves `agents`; every
@@ -159,6 +161,30 @@ def _split(action, agent: str, payload: int, limits, clip: bool):
     return move[0], move[1], say, say_len, clipped
 
 
+def flock_reward(state: dict, events: list) -> np.ndarray:
+    """The built-in `reward="flock"`: each robot's alignment with the swarm's mean heading
+    (cos of the difference, in [-1, 1]) minus a tenth of its distance to the swarm's centre
+    (metres), over the robots still up; 0 for a robot that is down or dead."""
+    up = state["state"] <= 1  # active or frozen
+    if not up.any():
+        return np.zeros_like(state["x"])
+    heading = np.arctan2(np.sin(state["theta"][up]).mean(), np.cos(state["theta"][up]).mean())
+    cx, cy = state["x"][up].mean(), state["y"][up].mean()
+    spread = np.hypot(state["x"] - cx, state["y"] - cy)
+    return np.where(up, np.cos(state["theta"] - heading) - 0.1 * spread, 0.0)
+
+
+def _reward_fn(reward) -> Optional[Reward]:
+    """None for the built-in goal reward, else the callable that computes the rewards."""
+    if reward is None or reward == "goal":
+        return None
+    if reward == "flock":
+        return flock_reward
+    if callable(reward):
+        return reward
+    raise ValueError(f"reward = {reward!r}: expected \"goal\", \"flock\" or a callable")
+
+
 def _builtin_or(reward: Optional[Reward], worlds: _Worlds, k: int, builtin: np.ndarray):
     if reward is None:
         return builtin
@@ -180,7 +206,7 @@ class SwarmParallelEnv(ParallelEnv):
         self._worlds = _Worlds(config, 1, seed, neighbours, inbox, payload, set)
         self._record = record
         self._next_seed = seed if seed is not None else self._worlds.limits["seed"]
-        self._reward = reward
+        self._reward = _reward_fn(reward)
         self._clip = clip_actions
         self.possible_agents = [f"robot_{i}" for i in range(self._worlds.n)]
         self.agents = list(self.possible_agents)
@@ -259,7 +285,7 @@ class SwarmGymEnv(gymnasium.Env):
                  inbox: int = 4, payload: int = 0, reward: Optional[Reward] = None,
                  set: Optional[Mapping[str, Any]] = None):
         self._worlds = _Worlds(config, 1, seed, neighbours, inbox, payload, set)
-        self._reward = reward
+        self._reward = _reward_fn(reward)
         n = self._worlds.n
         self.observation_space = _observation_space(self._worlds.layout, (n,))
         self.action_space = _action_space(self._worlds.limits, self._worlds.payload, (n,))
@@ -312,7 +338,7 @@ class SwarmVectorEnv(gymnasium.vector.VectorEnv):
                  neighbours: int = 8, inbox: int = 4, payload: int = 0,
                  reward: Optional[Reward] = None, set: Optional[Mapping[str, Any]] = None):
         self._worlds = _Worlds(config, num_envs, seed, neighbours, inbox, payload, set)
-        self._reward = reward
+        self._reward = _reward_fn(reward)
         w = self._worlds
         self.num_envs = num_envs
         self.single_observation_space = _observation_space(w.layout, (w.n,))
