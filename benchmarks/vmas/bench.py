@@ -53,7 +53,7 @@ MAX_TURN = 3.0
 DT = 0.1
 RAYS = 16
 LIDAR_RANGE = 3.0
-SPACING = 1.0
+SPACING = 1.5
 RADIO = {"range": 6.0, "loss": 0.1, "delay_ticks": 2, "jitter_ticks": 0, "capacity": 4}
 
 NS = [4, 32, 128, 512]
@@ -296,14 +296,23 @@ def run_child(spec: dict) -> None:
 # The driver.
 
 
-def steps_for(n: int, k: int, sim_scale: float = 1.0) -> int:
-    """Steps per cell, the same for both simulators (chosen on this 2-core machine so the
-    slower of the two takes a few seconds to a minute)."""
-    table = {4: 600, 32: 200, 128: 40, 512: 6}
-    steps = table[n]
-    if k >= 64 and n >= 128:
-        steps = max(4, steps // 2)
-    return max(4, int(round(steps * sim_scale)))
+# Timed steps per cell and simulator, fixed (not adapted at run time): chosen on this 2-core
+# Xeon so that each child's timed part takes a few seconds (VMAS at N=512 takes 4-30 s a
+# step, so there a few steps are already tens of seconds). {N: (K=1, K=16, K=64)}.
+STEPS = {
+    "ours": {4: (40000, 10000, 5000), 32: (20000, 3000, 1000), 128: (10000, 1000, 300),
+             512: (3000, 300, 100)},
+    "vmas": {4: (1000, 1000, 1000), 32: (200, 150, 100), 128: (25, 15, 10),
+             512: (4, 3, 2)},
+}
+
+
+def steps_for(sim: str, n: int, k: int, scale: float = 1.0) -> int:
+    """Timed steps of one child: the table's, for the nearest tabled N and K."""
+    table = STEPS[sim]
+    tn = min(table, key=lambda x: abs(math.log(x) - math.log(n)))
+    tk = min(range(3), key=lambda i: abs(math.log((1, 16, 64)[i]) - math.log(k)))
+    return max(2, int(round(table[tn][tk] * scale)))
 
 
 def _rss_of(pid: int) -> float:
@@ -532,11 +541,11 @@ def main() -> None:
         for n, k in cells:
             cfg = res / "configs" / f"swarmrt_n{n}.toml"
             cfg.write_text(swarmrt_config(n, args.episode))
-            steps = steps_for(n, k, args.steps_scale)
-            warmup = max(2, steps // 10)
             failed: dict[str, str] = {}
             for rnd in range(args.rounds):
                 for sim in sims:
+                    steps = steps_for(sim, n, k, args.steps_scale)
+                    warmup = max(1, steps // 10)
                     spec = {"sim": sim, "n": n, "k": k, "steps": steps, "warmup": warmup,
                             "episode": args.episode, "seed": 1, "config": str(cfg)}
                     if sim in failed:

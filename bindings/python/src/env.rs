@@ -265,36 +265,18 @@ impl VecEnv {
     }
 }
 
-/// Steps each world with its slice of `actions`, on up to as many threads as cores.
+/// Steps each world with its slice of `actions`, on rayon's pool (threads that stay up
+/// between steps: spawning two threads a step cost more than a small world's step).
 fn step_all(
     envs: &mut [Env],
     actions: &[Action],
     n: usize,
 ) -> Vec<Result<swarmrt_harness::env::Outcome, EnvError>> {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |c| c.get())
-        .min(envs.len());
-    if threads <= 1 {
-        return (envs.iter_mut().enumerate())
-            .map(|(k, e)| e.step(&actions[k * n..(k + 1) * n]))
-            .collect();
-    }
-    let per = envs.len().div_ceil(threads);
-    std::thread::scope(|s| {
-        let handles: Vec<_> = (envs.chunks_mut(per).zip(actions.chunks(per * n)))
-            .map(|(chunk, acts)| {
-                s.spawn(move || {
-                    (chunk.iter_mut().enumerate())
-                        .map(|(k, e)| e.step(&acts[k * n..(k + 1) * n]))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
-            .collect()
-    })
+    use rayon::prelude::*;
+    envs.par_iter_mut()
+        .zip(actions.par_chunks(n.max(1)))
+        .map(|(e, a)| e.step(a))
+        .collect()
 }
 
 fn f64s(bytes: &[u8], count: usize, name: &str) -> PyResult<Vec<f64>> {

@@ -367,8 +367,8 @@ class SwarmVectorEnv(gymnasium.vector.VectorEnv):
             self._next_seed += 1
             v[k], omega[k], say_len[k] = 0.0, 0.0, 0
         builtin, terminated, truncated = w.step(v, omega, say, say_len)
-        rewards = np.stack([_builtin_or(self._reward, w, k, builtin[k])
-                            for k in range(self.num_envs)])
+        rewards = builtin if self._reward is None else np.stack(
+            [_builtin_or(self._reward, w, k, builtin[k]) for k in range(self.num_envs)])
         restarted = self._ended.copy()
         rewards[restarted] = 0.0
         terminated[restarted] = False
